@@ -1,0 +1,82 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "cli_util.h"
+
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include "ido/core/atomic_file.h"
+#include "ido/core/error.h"
+
+namespace ido::cli {
+namespace {
+std::vector<std::string> split_commas(std::string_view text) {
+  std::vector<std::string> parts;
+  std::size_t start = 0;
+  while (true) {
+    const auto pos = text.find(',', start);
+    parts.emplace_back(text.substr(start, pos == std::string_view::npos ? text.npos : pos - start));
+    if (pos == std::string_view::npos) break;
+    start = pos + 1;
+  }
+  return parts;
+}
+}  // namespace
+
+Vec3 parse_vec3(std::string_view text, std::string_view what) {
+  const auto parts = split_commas(text);
+  if (parts.size() != 3)
+    throw InvalidInput(fmt::format("{}: expected three comma-separated numbers, got '{}'", what, text));
+  Vec3 v;
+  for (int a = 0; a < 3; ++a) {
+    try {
+      std::size_t used = 0;
+      v[a] = std::stod(parts[a], &used);
+      if (used != parts[a].size()) throw std::invalid_argument("trailing");
+    } catch (const std::exception&) {
+      throw InvalidInput(fmt::format("{}: '{}' is not a number", what, parts[a]));
+    }
+    if (!std::isfinite(v[a])) throw InvalidInput(fmt::format("{}: '{}' is not finite", what, parts[a]));
+  }
+  return v;
+}
+
+Index3 parse_index3(std::string_view text, std::string_view what) {
+  const auto parts = split_commas(text);
+  if (parts.size() != 3)
+    throw InvalidInput(fmt::format("{}: expected three comma-separated integers, got '{}'", what, text));
+  Index3 idx{};
+  for (int a = 0; a < 3; ++a) {
+    const auto& p = parts[a];
+    const auto res = std::from_chars(p.data(), p.data() + p.size(), idx[a]);
+    if (res.ec != std::errc{} || res.ptr != p.data() + p.size())
+      throw InvalidInput(fmt::format("{}: '{}' is not an integer", what, p));
+  }
+  return idx;
+}
+
+std::unique_ptr<Progress> make_progress(bool quiet) {
+  if (quiet || !::isatty(STDERR_FILENO)) return std::make_unique<Progress>();
+  return std::make_unique<Progress>([last = -1](double fraction, std::string_view stage) mutable {
+    const int percent = static_cast<int>(std::lround(std::clamp(fraction, 0.0, 1.0) * 100.0));
+    if (percent == last) return;
+    last = percent;
+    const int filled = percent * 30 / 100;
+    std::fprintf(stderr, "\r%-24.24s [%s%s] %3d%%", std::string(stage).c_str(),
+                 std::string(static_cast<std::size_t>(filled), '#').c_str(),
+                 std::string(static_cast<std::size_t>(30 - filled), ' ').c_str(), percent);
+    if (percent >= 100) std::fputc('\n', stderr);
+    std::fflush(stderr);
+  });
+}
+
+void write_text_file(const std::string& path, const std::string& text) {
+  write_file_atomically(path, [&](std::ostream& out) { out << text; }, false);
+}
+
+}  // namespace ido::cli

@@ -1,0 +1,27 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+
+#include <memory>
+#include <string>
+#include <string_view>
+
+#include "ido/core/math.h"
+#include "ido/core/progress.h"
+
+namespace ido::cli {
+
+/// Parses "X,Y,Z" into a vector. @p what names the argument in the error message.
+/// @throws ido::InvalidInput on anything but three finite numbers.
+Vec3 parse_vec3(std::string_view text, std::string_view what);
+
+/// Parses "I,J,K" into integer indices; @throws ido::InvalidInput.
+Index3 parse_index3(std::string_view text, std::string_view what);
+
+/// A Progress that draws a bar on stderr when stderr is a terminal and quiet is off,
+/// and reports nothing otherwise.
+std::unique_ptr<Progress> make_progress(bool quiet);
+
+/// Writes @p text to @p path atomically (temp file + rename).
+void write_text_file(const std::string& path, const std::string& text);
+
+}  // namespace ido::cli

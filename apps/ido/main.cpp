@@ -1,0 +1,82 @@
+// SPDX-License-Identifier: Apache-2.0
+// The `ido` command-line tool. Subcommands live in cmd_*.cpp and register themselves; this
+// file only parses global flags, installs the logger and maps errors to exit codes:
+// 0 success, 2 bad input or arguments, 1 internal failure.
+#include <algorithm>
+#include <cstdio>
+#include <exception>
+
+#include <CLI/CLI.hpp>
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+
+#include "command.h"
+#include "ido/core/error.h"
+#include "ido/core/log.h"
+
+namespace ido::cli {
+
+bool register_command(Command command) {
+  registered_commands().push_back(std::move(command));
+  return true;
+}
+
+std::vector<Command>& registered_commands() {
+  static std::vector<Command> commands;
+  return commands;
+}
+
+}  // namespace ido::cli
+
+int main(int argc, char** argv) {
+  using namespace ido::cli;
+  CLI::App app{"ido — toolkit for computer-assisted surgery (balloon segmentation, "
+               "deformable simulation, bone drilling)"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "ido 0.1.0");
+  GlobalOptions global;
+  app.add_flag("-v,--verbose", global.verbose, "Log details to stderr");
+  app.add_flag("-q,--quiet", global.quiet, "Only errors on stderr, no progress bar");
+
+  auto& commands = registered_commands();
+  std::stable_sort(commands.begin(), commands.end(),
+                   [](const Command& a, const Command& b) { return a.order < b.order; });
+  for (const auto& c : commands) c.setup(app, global);
+
+  auto sink = std::make_shared<spdlog::sinks::stderr_color_sink_mt>();
+  auto logger = std::make_shared<spdlog::logger>("ido", sink);
+  logger->set_pattern("%^[%l]%$ %v");
+  logger->set_level(spdlog::level::warn);
+  ido::set_logger(logger);
+  app.parse_complete_callback([&] {
+    logger->set_level(global.quiet     ? spdlog::level::err
+                      : global.verbose ? spdlog::level::debug
+                                       : spdlog::level::info);
+  });
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::fprintf(stderr, "ido: error: %s\n", e.what());
+    return 2;
+  } catch (const ido::InvalidInput& e) {
+    std::fprintf(stderr, "ido: error: %s\n", e.what());
+    return 2;
+  } catch (const ido::IoError& e) {
+    std::fprintf(stderr, "ido: error: %s\n", e.what());
+    return 2;
+  } catch (const ido::Cancelled& e) {
+    std::fprintf(stderr, "ido: cancelled\n");
+    return 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "ido: internal error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,38 @@
+# SPDX-License-Identifier: Apache-2.0
+
+# ido_add_module(NAME SOURCES ... [PUBLIC_DEPS ...] [PRIVATE_DEPS ...])
+# Creates library ido_<NAME> with alias ido::<NAME>, exported as ido::<NAME>.
+function(ido_add_module name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;PUBLIC_DEPS;PRIVATE_DEPS" ${ARGN})
+  add_library(ido_${name} ${ARG_SOURCES})
+  add_library(ido::${name} ALIAS ido_${name})
+  set_target_properties(ido_${name} PROPERTIES EXPORT_NAME ${name} OUTPUT_NAME ido_${name})
+  target_include_directories(ido_${name} PUBLIC
+    $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}/include>
+    $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
+  target_link_libraries(ido_${name} PUBLIC ${ARG_PUBLIC_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
+  ido_set_warnings(ido_${name})
+  install(TARGETS ido_${name} EXPORT idoTargets
+    LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
+    ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
+    RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+endfunction()
+
+# ido_add_test(NAME SOURCES ... LIBS ... [LABELS ...] [TIMEOUT s])
+# One GoogleTest executable; every TEST in it becomes a ctest test (gtest_discover_tests).
+# Label "slow" marks tests skipped in the sanitizer builds; "data" marks tests that need
+# ../shared/data (they skip themselves when it is absent).
+function(ido_add_test name)
+  cmake_parse_arguments(ARG "" "TIMEOUT" "SOURCES;LIBS;LABELS" ${ARGN})
+  add_executable(${name} ${ARG_SOURCES})
+  target_link_libraries(${name} PRIVATE ${ARG_LIBS} ido_test_support GTest::gtest GTest::gmock GTest::gtest_main)
+  ido_set_warnings(${name})
+  if(NOT ARG_TIMEOUT)
+    set(ARG_TIMEOUT 600)
+  endif()
+  set(props TIMEOUT ${ARG_TIMEOUT})
+  if(ARG_LABELS)
+    list(APPEND props LABELS "${ARG_LABELS}")
+  endif()
+  gtest_discover_tests(${name} PROPERTIES ${props} DISCOVERY_TIMEOUT 60)
+endfunction()

@@ -1,0 +1,36 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+
+#include <cstddef>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+namespace ido {
+
+/// Calls body(begin, end) over disjoint sub-ranges covering [0, n), in parallel with oneTBB
+/// when @p threaded is true, else serially in one call. @p grain is the smallest chunk.
+template <class Body>
+void parallel_for_ranges(std::size_t n, Body&& body, bool threaded = true,
+                         std::size_t grain = 256) {
+  if (n == 0) return;
+  if (!threaded || n <= grain) {
+    body(std::size_t{0}, n);
+    return;
+  }
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, grain),
+                    [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); });
+}
+
+/// Calls body(i) for every i in [0, n), in parallel when @p threaded.
+template <class Body>
+void parallel_for(std::size_t n, Body&& body, bool threaded = true, std::size_t grain = 256) {
+  parallel_for_ranges(
+      n,
+      [&](std::size_t b, std::size_t e) {
+        for (std::size_t i = b; i < e; ++i) body(i);
+      },
+      threaded, grain);
+}
+
+}  // namespace ido

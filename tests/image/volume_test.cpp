@@ -1,0 +1,82 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "ido/image/volume.h"
+
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "support/test_support.h"
+
+namespace ido::image {
+using test::near;
+
+namespace {
+Mat3 rotation(double ax, double ay, double az) {
+  return (Eigen::AngleAxisd(az, Vec3::UnitZ()) * Eigen::AngleAxisd(ay, Vec3::UnitY()) *
+          Eigen::AngleAxisd(ax, Vec3::UnitX()))
+      .toRotationMatrix();
+}
+}  // namespace
+
+TEST(Volume, IndexToWorldFollowsItkFormula) {
+  const Mat3 d = rotation(0.3, -0.2, 1.1);
+  Volume<float> v({10, 20, 30}, Vec3(0.5, 0.8, 2.0), Vec3(-10, 5, 100), d);
+  const Vec3 idx(3, 7, 11);
+  const Vec3 expected = Vec3(-10, 5, 100) + d * Vec3(3 * 0.5, 7 * 0.8, 11 * 2.0);
+  EXPECT_LT((v.index_to_world(idx) - expected).norm(), 1e-12);
+}
+
+TEST(Volume, WorldToIndexInvertsIndexToWorld) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-50, 50);
+  Volume<float> v({8, 8, 8}, Vec3(0.7, 1.3, 2.5), Vec3(1, 2, 3), rotation(0.5, 0.1, -0.4));
+  for (int t = 0; t < 100; ++t) {
+    const Vec3 w(u(rng), u(rng), u(rng));
+    EXPECT_LT((v.index_to_world(v.world_to_index(w)) - w).norm(), 1e-10);
+  }
+}
+
+TEST(Volume, TrilinearReproducesLinearFunctionsExactly) {
+  // A linear function of the index is reproduced exactly by trilinear interpolation.
+  Volume<double> v({6, 7, 8}, Vec3(1.0, 0.5, 2.0), Vec3(3, -1, 0));
+  for (int k = 0; k < 8; ++k)
+    for (int j = 0; j < 7; ++j)
+      for (int i = 0; i < 6; ++i) v(i, j, k) = 2.0 * i - 3.0 * j + 0.5 * k + 1.0;
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<double> ui(0, 5), uj(0, 6), uk(0, 7);
+  for (int t = 0; t < 200; ++t) {
+    const Vec3 idx(ui(rng), uj(rng), uk(rng));
+    EXPECT_TRUE(near(v.sample_index(idx), 2.0 * idx.x() - 3.0 * idx.y() + 0.5 * idx.z() + 1.0, 1e-12));
+    EXPECT_TRUE(near(v.sample(v.index_to_world(idx)), v.sample_index(idx), 1e-9));
+  }
+}
+
+TEST(Volume, BoundaryModes) {
+  Volume<float> v({4, 4, 4}, Vec3::Ones(), Vec3::Zero(), Mat3::Identity(), 5.0f);
+  EXPECT_DOUBLE_EQ(v.sample(Vec3(-10, 1, 1), Boundary::Clamp), 5.0);
+  EXPECT_DOUBLE_EQ(v.sample(Vec3(-10, 1, 1), Boundary::Constant, -1000.0), -1000.0);
+  EXPECT_DOUBLE_EQ(v.sample(Vec3(-0.4, 1, 1), Boundary::Constant, -1000.0), 5.0);
+  EXPECT_DOUBLE_EQ(v.sample(Vec3(3.0, 3.0, 3.0), Boundary::Constant, -1000.0), 5.0);
+}
+
+TEST(Volume, SingleVoxelThickAxisSamples) {
+  Volume<float> v({4, 4, 1}, Vec3::Ones(), Vec3::Zero(), Mat3::Identity(), 2.0f);
+  EXPECT_DOUBLE_EQ(v.sample(Vec3(1.5, 1.5, 0.0)), 2.0);
+}
+
+TEST(Volume, RejectsBadGeometry) {
+  EXPECT_THROW(Volume<float>({2, 2, 2}, Vec3(1, 0, 1)), InvalidInput);
+  EXPECT_THROW(Volume<float>({2, 2, 2}, Vec3(1, 1, 1), Vec3::Zero(), Mat3::Zero()), InvalidInput);
+  EXPECT_THROW(Volume<float>({-1, 2, 2}), InvalidInput);
+  Volume<float> v({2, 2, 2});
+  EXPECT_THROW((void)v.at(2, 0, 0), InvalidInput);
+}
+
+TEST(Volume, LikeKeepsGrid) {
+  Volume<std::int16_t> ct({5, 6, 7}, Vec3(0.9, 0.9, 2), Vec3(1, 2, 3), rotation(0, 0, 0.5));
+  const auto mask = ct.like<std::uint8_t>(1);
+  EXPECT_TRUE(ct.same_grid(mask));
+  EXPECT_EQ(mask.voxel_count(), 5u * 6u * 7u);
+}
+
+}  // namespace ido::image
