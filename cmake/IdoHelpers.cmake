@@ -36,3 +36,15 @@ function(ido_add_test name)
   endif()
   gtest_discover_tests(${name} PROPERTIES ${props} DISCOVERY_TIMEOUT 60)
 endfunction()
+
+# ido_existing_sources(OUT file...): the files of the list that exist in the current
+# source folder. Lets a module's source list name files that parallel work adds later.
+function(ido_existing_sources out)
+  set(found "")
+  foreach(f IN LISTS ARGN)
+    if(EXISTS ${CMAKE_CURRENT_SOURCE_DIR}/${f})
+      list(APPEND found ${f})
+    endif()
+  endforeach()
+  set(${out} ${found} PARENT_SCOPE)
+endfunction()
