@@ -1,0 +1,49 @@
+// SPDX-License-Identifier: Apache-2.0
+// Builds DICOM test input at run time with ITK (a separate translation unit: ITK's bundled
+// Eigen must not meet the system Eigen of ido's headers).
+#include "dicom_writer.h"
+
+#include <itkGDCMImageIO.h>
+#include <itkImage.h>
+#include <itkImageFileWriter.h>
+#include <itkMetaDataObject.h>
+
+namespace ido::test {
+
+void write_tiny_dicom_series(const std::filesystem::path& dir, const std::string& series_uid,
+                             const std::string& prefix, int slices) {
+  using Image = itk::Image<std::int16_t, 3>;
+  for (int s = 0; s < slices; ++s) {
+    auto img = Image::New();
+    Image::RegionType region;
+    region.SetSize({{4, 3, 1}});
+    img->SetRegions(region);
+    img->Allocate();
+    img->SetSpacing(itk::Vector<double, 3>(std::array<double, 3>{0.5, 0.5, 2.0}.data()));
+    Image::PointType origin;
+    origin[0] = 0.0;
+    origin[1] = 0.0;
+    origin[2] = 2.0 * s;
+    img->SetOrigin(origin);
+    img->FillBuffer(static_cast<std::int16_t>(100 + s));
+    auto io = itk::GDCMImageIO::New();
+    io->KeepOriginalUIDOn();
+    itk::MetaDataDictionary dict;
+    itk::EncapsulateMetaData<std::string>(dict, "0008|0060", "CT");
+    itk::EncapsulateMetaData<std::string>(dict, "0020|000e", series_uid);
+    itk::EncapsulateMetaData<std::string>(dict, "0020|000d", series_uid + ".1");
+    itk::EncapsulateMetaData<std::string>(dict, "0008|0018", series_uid + ".2." + std::to_string(s + 1));
+    itk::EncapsulateMetaData<std::string>(dict, "0020|0013", std::to_string(s + 1));
+    itk::EncapsulateMetaData<std::string>(dict, "0020|0032", "0\\0\\" + std::to_string(2 * s));
+    itk::EncapsulateMetaData<std::string>(dict, "0020|0037", "1\\0\\0\\0\\1\\0");
+    itk::EncapsulateMetaData<std::string>(dict, "0028|0030", "0.5\\0.5");
+    img->SetMetaDataDictionary(dict);
+    auto writer = itk::ImageFileWriter<Image>::New();
+    writer->SetImageIO(io);
+    writer->SetInput(img);
+    writer->SetFileName((dir / (prefix + std::to_string(s) + ".dcm")).string());
+    writer->Update();
+  }
+}
+
+}  // namespace ido::test
