@@ -1,0 +1,117 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "ido/drill/shapes.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "ido/core/error.h"
+
+namespace ido::drill {
+namespace {
+
+double signed_vol(const std::vector<Vec3>& v, const Tet& t) {
+  const auto& a = v[static_cast<std::size_t>(t[0])];
+  return (v[static_cast<std::size_t>(t[1])] - a).dot((v[static_cast<std::size_t>(t[2])] - a).cross(v[static_cast<std::size_t>(t[3])] - a));
+}
+
+void orient(geometry::TetMesh& m) {
+  for (auto& t : m.tets)
+    if (signed_vol(m.vertices, t) < 0.0) std::swap(t[2], t[3]);
+}
+
+// Kuhn subdivision of a cube with corner ids c[bits] (bit 0 = x, 1 = y, 2 = z): 6 tets along
+// the diagonal 0 → 7, one per axis permutation.
+void kuhn(const std::array<std::int32_t, 8>& c, std::vector<Tet>& out) {
+  static constexpr int kPerm[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+  for (const auto& p : kPerm) {
+    int b0 = 0;
+    const int b1 = b0 | (1 << p[0]);
+    const int b2 = b1 | (1 << p[1]);
+    const int b3 = b2 | (1 << p[2]);
+    out.push_back({c[static_cast<std::size_t>(b0)], c[static_cast<std::size_t>(b1)], c[static_cast<std::size_t>(b2)],
+                   c[static_cast<std::size_t>(b3)]});
+  }
+}
+
+double parse_number(std::string_view text, std::string_view spec) {
+  double v = 0.0;
+  const auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+  if (ec != std::errc() || ptr != text.data() + text.size() || !std::isfinite(v)) {
+    throw InvalidInput("shape '" + std::string(spec) + "': '" + std::string(text) + "' is not a number");
+  }
+  return v;
+}
+
+}  // namespace
+
+geometry::TetMesh make_cube(double size_mm) { return make_block({size_mm, size_mm, size_mm}, size_mm); }
+
+geometry::TetMesh make_cube12(double size_mm) {
+  if (!(size_mm > 0.0)) throw InvalidInput("cube12: size must be positive");
+  geometry::TetMesh m;
+  for (int b = 0; b < 8; ++b) m.vertices.emplace_back((b & 1) * size_mm, ((b >> 1) & 1) * size_mm, ((b >> 2) & 1) * size_mm);
+  m.vertices.emplace_back(0.5 * size_mm, 0.5 * size_mm, 0.5 * size_mm);
+  // Faces as quads (corner bit patterns), each split along one diagonal.
+  static constexpr int kQuads[6][4] = {{0, 1, 3, 2}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 3, 7, 5}};
+  for (const auto& q : kQuads) {
+    m.tets.push_back({q[0], q[1], q[2], 8});
+    m.tets.push_back({q[0], q[2], q[3], 8});
+  }
+  orient(m);
+  return m;
+}
+
+geometry::TetMesh make_block(const Vec3& size_mm, double cell_mm) {
+  if (!(size_mm.minCoeff() > 0.0) || !size_mm.allFinite() || !(cell_mm > 0.0) || !std::isfinite(cell_mm)) {
+    throw InvalidInput("block: sizes and cell size must be positive and finite");
+  }
+  std::array<int, 3> n{};
+  double cells = 1.0;
+  for (int a = 0; a < 3; ++a) {
+    n[static_cast<std::size_t>(a)] = std::max(1, static_cast<int>(std::lround(size_mm[a] / cell_mm)));
+    cells *= n[static_cast<std::size_t>(a)];
+  }
+  if (cells * 6.0 > 1e7) throw InvalidInput("block: more than 10^7 tetrahedra; use a larger cell");
+  geometry::TetMesh m;
+  auto id = [&](int i, int j, int k) { return static_cast<std::int32_t>((k * (n[1] + 1) + j) * (n[0] + 1) + i); };
+  for (int k = 0; k <= n[2]; ++k)
+    for (int j = 0; j <= n[1]; ++j)
+      for (int i = 0; i <= n[0]; ++i)
+        m.vertices.emplace_back(size_mm.x() * i / n[0], size_mm.y() * j / n[1], size_mm.z() * k / n[2]);
+  for (int k = 0; k < n[2]; ++k)
+    for (int j = 0; j < n[1]; ++j)
+      for (int i = 0; i < n[0]; ++i) {
+        std::array<std::int32_t, 8> c{};
+        for (int b = 0; b < 8; ++b) c[static_cast<std::size_t>(b)] = id(i + (b & 1), j + ((b >> 1) & 1), k + ((b >> 2) & 1));
+        kuhn(c, m.tets);
+      }
+  orient(m);
+  return m;
+}
+
+geometry::TetMesh make_shape(std::string_view spec) {
+  if (spec == "cube") return make_cube(1.0);
+  if (spec == "cube12") return make_cube12(1.0);
+  if (spec.starts_with("block:")) {
+    std::vector<double> v;
+    std::string_view rest = spec.substr(6);
+    while (!rest.empty()) {
+      const auto comma = rest.find(',');
+      v.push_back(parse_number(rest.substr(0, comma), spec));
+      if (comma == std::string_view::npos) break;
+      rest = rest.substr(comma + 1);
+    }
+    if (v.size() != 3 && v.size() != 4) {
+      throw InvalidInput("shape '" + std::string(spec) + "': expected block:SX,SY,SZ[,CELL]");
+    }
+    const Vec3 size(v[0], v[1], v[2]);
+    const double cell = v.size() == 4 ? v[3] : size.minCoeff() / 4.0;
+    return make_block(size, cell);
+  }
+  throw InvalidInput("unknown shape '" + std::string(spec) + "' (expected cube, cube12 or block:SX,SY,SZ[,CELL])");
+}
+
+}  // namespace ido::drill
