@@ -1,0 +1,206 @@
+// SPDX-License-Identifier: Apache-2.0
+// Separable Gaussian smoothing, finite-difference gradients and robust statistics; the
+// project's own straightforward implementations (no algorithm beyond the textbook ones).
+#include "ido/image/filters.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "ido/core/error.h"
+#include "ido/core/parallel.h"
+
+namespace ido::image {
+namespace {
+
+/// Sampled Gaussian of @p sigma_vox voxels, half-width ceil(truncate · sigma), sum 1.
+std::vector<float> gaussian_kernel(double sigma_vox, double truncate) {
+  const int half = std::max(1, static_cast<int>(std::ceil(truncate * sigma_vox)));
+  std::vector<double> w(static_cast<std::size_t>(2 * half + 1));
+  double sum = 0.0;
+  for (int m = -half; m <= half; ++m) {
+    const double v = std::exp(-0.5 * (m * m) / (sigma_vox * sigma_vox));
+    w[static_cast<std::size_t>(m + half)] = v;
+    sum += v;
+  }
+  std::vector<float> out(w.size());
+  for (std::size_t n = 0; n < w.size(); ++n) out[n] = static_cast<float>(w[n] / sum);
+  return out;
+}
+
+/// One 1D convolution along @p axis with border replication.
+Volume<float> convolve_axis(const Volume<float>& in, int axis, const std::vector<float>& kernel,
+                            bool threaded) {
+  Volume<float> out = in.like<float>();
+  const std::int64_t nx = in.size(0), ny = in.size(1), nz = in.size(2);
+  const int half = static_cast<int>(kernel.size() / 2);
+  const float* src = in.data().data();
+  float* dst = out.data().data();
+  const std::size_t rows = static_cast<std::size_t>(ny * nz);
+  if (axis == 0) {
+    parallel_for_ranges(
+        rows,
+        [&](std::size_t b, std::size_t e) {
+          std::vector<float> padded(static_cast<std::size_t>(nx + 2 * half));
+          for (std::size_t r = b; r < e; ++r) {
+            const float* row = src + r * static_cast<std::size_t>(nx);
+            for (std::int64_t i = -half; i < nx + half; ++i)
+              padded[static_cast<std::size_t>(i + half)] = row[std::clamp<std::int64_t>(i, 0, nx - 1)];
+            float* orow = dst + r * static_cast<std::size_t>(nx);
+            for (std::int64_t i = 0; i < nx; ++i) {
+              float acc = 0.f;
+              const float* p = padded.data() + i;
+              for (std::size_t m = 0; m < kernel.size(); ++m) acc += kernel[m] * p[m];
+              orow[i] = acc;
+            }
+          }
+        },
+        threaded, 16);
+    return out;
+  }
+  // Along j or k every output row is a weighted sum of whole input rows (contiguous in i).
+  parallel_for_ranges(
+      rows,
+      [&](std::size_t b, std::size_t e) {
+        for (std::size_t r = b; r < e; ++r) {
+          const std::int64_t j = static_cast<std::int64_t>(r) % ny;
+          const std::int64_t k = static_cast<std::int64_t>(r) / ny;
+          float* orow = dst + r * static_cast<std::size_t>(nx);
+          std::fill(orow, orow + nx, 0.f);
+          for (int m = -half; m <= half; ++m) {
+            const std::int64_t jj = axis == 1 ? std::clamp<std::int64_t>(j + m, 0, ny - 1) : j;
+            const std::int64_t kk = axis == 2 ? std::clamp<std::int64_t>(k + m, 0, nz - 1) : k;
+            const float w = kernel[static_cast<std::size_t>(m + half)];
+            const float* irow = src + in.linear_index(0, jj, kk);
+            for (std::int64_t i = 0; i < nx; ++i) orow[i] += w * irow[i];
+          }
+        }
+      },
+      threaded, 16);
+  return out;
+}
+
+/// Index-space derivative along @p axis at (i, j, k): central, one-sided on the border,
+/// in intensity units per voxel.
+inline double index_derivative(const Volume<float>& v, std::int64_t i, std::int64_t j,
+                               std::int64_t k, int axis) {
+  const std::int64_t n = v.size(axis);
+  if (n < 2) return 0.0;
+  std::int64_t idx[3] = {i, j, k};
+  const std::int64_t c = idx[axis];
+  const std::int64_t lo = std::max<std::int64_t>(c - 1, 0), hi = std::min<std::int64_t>(c + 1, n - 1);
+  idx[axis] = hi;
+  const double fh = v(idx[0], idx[1], idx[2]);
+  idx[axis] = lo;
+  const double fl = v(idx[0], idx[1], idx[2]);
+  return (fh - fl) / static_cast<double>(hi - lo);
+}
+
+template <class Out, class Store>
+Volume<Out> gradient_impl(const Volume<float>& v, bool threaded, Out fill, Store store) {
+  Volume<Out> out = v.like<Out>(fill);
+  // ∇_world f = J^{-T} ∇_index f, where J = D·diag(spacing) maps index to world offsets.
+  const Mat3 jit = v.world_to_index_matrix().transpose();
+  const std::int64_t nx = v.size(0), ny = v.size(1);
+  parallel_for_ranges(
+      static_cast<std::size_t>(ny * v.size(2)),
+      [&](std::size_t b, std::size_t e) {
+        for (std::size_t r = b; r < e; ++r) {
+          const std::int64_t j = static_cast<std::int64_t>(r) % ny;
+          const std::int64_t k = static_cast<std::int64_t>(r) / ny;
+          for (std::int64_t i = 0; i < nx; ++i) {
+            const Vec3 gi(index_derivative(v, i, j, k, 0), index_derivative(v, i, j, k, 1),
+                          index_derivative(v, i, j, k, 2));
+            out(i, j, k) = store(Vec3(jit * gi));
+          }
+        }
+      },
+      threaded, 16);
+  return out;
+}
+
+}  // namespace
+
+Volume<float> gaussian_smooth(const Volume<float>& volume, double sigma_mm,
+                              const GaussianOptions& options) {
+  if (!(sigma_mm >= 0.0) || !std::isfinite(sigma_mm))
+    throw InvalidInput("gaussian_smooth: sigma must be a finite number of mm >= 0, got " +
+                       std::to_string(sigma_mm));
+  if (!(options.truncate_sigmas >= 1.0))
+    throw InvalidInput("gaussian_smooth: truncate_sigmas must be >= 1");
+  if (sigma_mm == 0.0 || volume.empty()) return volume;
+  Volume<float> cur = volume;
+  for (int a = 0; a < 3; ++a) {
+    if (volume.size(a) < 2) continue;
+    const double sigma_vox = sigma_mm / volume.spacing()[a];
+    if (sigma_vox < 1e-3) continue;  // kernel is a delta to float precision
+    cur = convolve_axis(cur, a, gaussian_kernel(sigma_vox, options.truncate_sigmas),
+                        options.threaded);
+  }
+  return cur;
+}
+
+Volume<Vec3f> gradient(const Volume<float>& volume, bool threaded) {
+  return gradient_impl<Vec3f>(volume, threaded, Vec3f::Zero(), [](const Vec3& g) { return Vec3f(g.cast<float>()); });
+}
+
+Volume<float> gradient_magnitude(const Volume<float>& volume, bool threaded) {
+  return gradient_impl<float>(volume, threaded, 0.f,
+                              [](const Vec3& g) { return static_cast<float>(g.norm()); });
+}
+
+double median(std::vector<double> values) {
+  if (values.empty()) throw InvalidInput("median of an empty sample");
+  const std::size_t n = values.size();
+  const auto mid = values.begin() + static_cast<std::ptrdiff_t>(n / 2);
+  std::nth_element(values.begin(), mid, values.end());
+  const double upper = *mid;
+  if (n % 2 == 1) return upper;
+  const double lower = *std::max_element(values.begin(), mid);
+  return 0.5 * (lower + upper);
+}
+
+RobustStats robust_stats(std::vector<double> values) {
+  if (values.empty()) throw InvalidInput("robust statistics of an empty sample");
+  RobustStats s;
+  s.count = values.size();
+  s.median = median(values);
+  for (double& v : values) v = std::abs(v - s.median);
+  s.mad = median(std::move(values));
+  return s;
+}
+
+RobustStats robust_stats_in_ball(const Volume<float>& volume, const Vec3& centre_mm,
+                                 double radius_mm) {
+  if (volume.empty()) throw InvalidInput("robust_stats_in_ball: empty volume");
+  if (!(radius_mm >= 0.0) || !std::isfinite(radius_mm))
+    throw InvalidInput("robust_stats_in_ball: radius must be a finite number of mm >= 0");
+  const Vec3 c = volume.world_to_index(centre_mm);
+  for (int a = 0; a < 3; ++a)
+    if (!(c[a] >= -0.5 && c[a] <= double(volume.size(a)) - 0.5))
+      throw InvalidInput("robust_stats_in_ball: centre lies outside the volume");
+  // Index-space bounding box of the ball: |Δindex_a| ≤ r · ‖row a of world_to_index‖.
+  std::int64_t lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) {
+    const double reach = radius_mm * volume.world_to_index_matrix().row(a).norm();
+    lo[a] = std::max<std::int64_t>(0, static_cast<std::int64_t>(std::floor(c[a] - reach)));
+    hi[a] = std::min<std::int64_t>(volume.size(a) - 1, static_cast<std::int64_t>(std::ceil(c[a] + reach)));
+  }
+  std::vector<double> values;
+  const double r2 = radius_mm * radius_mm;
+  for (std::int64_t k = lo[2]; k <= hi[2]; ++k)
+    for (std::int64_t j = lo[1]; j <= hi[1]; ++j)
+      for (std::int64_t i = lo[0]; i <= hi[0]; ++i) {
+        const Vec3 w = volume.index_to_world(Vec3(double(i), double(j), double(k)));
+        if ((w - centre_mm).squaredNorm() <= r2) values.push_back(volume(i, j, k));
+      }
+  if (values.empty()) {
+    const auto clampi = [&](int a) {
+      return std::clamp<std::int64_t>(std::llround(c[a]), 0, volume.size(a) - 1);
+    };
+    values.push_back(volume(clampi(0), clampi(1), clampi(2)));
+  }
+  return robust_stats(std::move(values));
+}
+
+}  // namespace ido::image

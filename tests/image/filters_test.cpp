@@ -1,0 +1,111 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "ido/image/filters.h"
+
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "support/test_support.h"
+
+namespace ido::image {
+using test::near;
+using test::rel_near;
+
+namespace {
+Mat3 rotation(double ax, double ay, double az) {
+  return (Eigen::AngleAxisd(az, Vec3::UnitZ()) * Eigen::AngleAxisd(ay, Vec3::UnitY()) *
+          Eigen::AngleAxisd(ax, Vec3::UnitX()))
+      .toRotationMatrix();
+}
+}  // namespace
+
+TEST(GaussianSmooth, ConstantStaysConstant) {
+  Volume<float> v({17, 12, 9}, Vec3(0.7, 1.3, 2.1), Vec3::Zero(), Mat3::Identity(), 42.5f);
+  const auto s = gaussian_smooth(v, 2.5);
+  for (float x : s.data()) ASSERT_TRUE(near(x, 42.5, 1e-4));
+}
+
+TEST(GaussianSmooth, DeltaIntegratesToOneWithPerAxisVarianceInMillimetres) {
+  const Vec3 spacing(0.5, 1.0, 2.0);
+  const double sigma_mm = 3.0;
+  Volume<float> v({61, 41, 31}, spacing, Vec3(5, -2, 7), rotation(0.2, 0.5, -0.3), 0.f);
+  const std::int64_t ci = 30, cj = 20, ck = 15;
+  v(ci, cj, ck) = 1.f;
+  const auto s = gaussian_smooth(v, sigma_mm, {.threaded = true});
+  double mass = 0;
+  Vec3 mean = Vec3::Zero(), var = Vec3::Zero();
+  for (std::int64_t k = 0; k < 31; ++k)
+    for (std::int64_t j = 0; j < 41; ++j)
+      for (std::int64_t i = 0; i < 61; ++i) {
+        const double w = s(i, j, k);
+        const Vec3 d((i - ci) * spacing[0], (j - cj) * spacing[1], (k - ck) * spacing[2]);
+        mass += w;
+        mean += w * d;
+        var += w * d.cwiseProduct(d);
+      }
+  EXPECT_TRUE(near(mass, 1.0, 1e-5));
+  EXPECT_LT(mean.norm(), 1e-5);
+  // Sampled Gaussians with σ ≥ 1.5 voxels have variance σ² to better than 0.1 %.
+  for (int a = 0; a < 3; ++a) EXPECT_TRUE(rel_near(var[a], sigma_mm * sigma_mm, 2e-3)) << a;
+}
+
+TEST(GaussianSmooth, ThreadedEqualsSerialAndRejectsBadSigma) {
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<float> u(-100, 100);
+  Volume<float> v({23, 19, 11}, Vec3(1, 1.5, 0.8));
+  for (float& x : v.data()) x = u(rng);
+  const auto a = gaussian_smooth(v, 1.7, {.threaded = false});
+  const auto b = gaussian_smooth(v, 1.7, {.threaded = true});
+  EXPECT_EQ(a.data(), b.data());
+  EXPECT_TRUE(a.same_grid(v));
+  EXPECT_EQ(gaussian_smooth(v, 0.0).data(), v.data());
+  EXPECT_THROW((void)gaussian_smooth(v, -1.0), InvalidInput);
+  EXPECT_THROW((void)gaussian_smooth(v, NAN), InvalidInput);
+}
+
+TEST(Gradient, LinearFieldIsExactInWorldFrame) {
+  const Mat3 d = rotation(0.3, -0.7, 1.2);
+  Volume<float> v({9, 8, 7}, Vec3(0.6, 1.1, 1.9), Vec3(3, -4, 5), d);
+  const Vec3 g(2.0, -1.5, 0.75);  // intensity per mm
+  for (std::int64_t k = 0; k < 7; ++k)
+    for (std::int64_t j = 0; j < 8; ++j)
+      for (std::int64_t i = 0; i < 9; ++i)
+        v(i, j, k) = float(10.0 + g.dot(v.index_to_world(Vec3(double(i), double(j), double(k)))));
+  const auto grad = gradient(v);
+  const auto mag = gradient_magnitude(v);
+  for (std::int64_t k = 0; k < 7; ++k)
+    for (std::int64_t j = 0; j < 8; ++j)
+      for (std::int64_t i = 0; i < 9; ++i) {  // borders included (one-sided differences)
+        ASSERT_LT((grad(i, j, k).cast<double>() - g).norm(), 2e-4);
+        ASSERT_TRUE(near(mag(i, j, k), g.norm(), 2e-4));
+      }
+}
+
+TEST(RobustStats, MedianAndMad) {
+  EXPECT_DOUBLE_EQ(median({3, 1, 2}), 2.0);
+  EXPECT_DOUBLE_EQ(median({4, 1, 3, 2}), 2.5);
+  EXPECT_THROW((void)median({}), InvalidInput);
+  const auto s = robust_stats({1, 2, 3, 4, 100});
+  EXPECT_DOUBLE_EQ(s.median, 3.0);
+  EXPECT_DOUBLE_EQ(s.mad, 1.0);  // |dev| = 2 1 0 1 97
+}
+
+TEST(RobustStats, BallIgnoresOutliersAndUsesWorldRadius) {
+  std::mt19937 rng(9);
+  std::normal_distribution<double> noise(350.0, 20.0);
+  Volume<float> v({40, 40, 20}, Vec3(0.5, 0.5, 1.0), Vec3(-10, -10, 0));
+  for (float& x : v.data()) x = float(noise(rng));
+  // Outliers in 5 % of the voxels must not move the median much.
+  for (std::size_t n = 0; n < v.data().size(); n += 20) v.data()[n] = 3000.f;
+  const Vec3 c = v.index_to_world(Vec3(20, 20, 10));
+  const auto s = robust_stats_in_ball(v, c, 4.0);
+  // Ball volume 268 mm³ / 0.25 mm³ per voxel ≈ 1072 voxels.
+  EXPECT_NEAR(double(s.count), 4.0 / 3.0 * kPi * 64 / 0.25, 40.0);
+  EXPECT_TRUE(near(s.median, 350.0, 5.0));
+  EXPECT_TRUE(rel_near(s.sigma(), 20.0 * 1.05, 0.12));  // 5 % outliers inflate MAD slightly
+  EXPECT_THROW((void)robust_stats_in_ball(v, Vec3(1000, 0, 0), 2.0), InvalidInput);
+  EXPECT_EQ(robust_stats_in_ball(v, c, 0.0).count, 1u);
+}
+
+}  // namespace ido::image
