@@ -1,0 +1,96 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "ido/core/math.h"
+#include "ido/geometry/tet_mesh.h"
+#include "ido/sim/force_model.h"
+
+namespace ido::sim {
+
+/// Isotropic elastic material. Young's modulus is in pascals (N/m²); internally the FEM
+/// models work in N/mm² (1 Pa = 1e-6 N/mm², units.h).
+struct ElasticMaterial {
+  double youngs_modulus_pa = 1e5;   ///< E > 0
+  double poisson_ratio = 0.3;       ///< −1 < ν < 0.5
+};
+
+/// Lamé parameters in N/mm².
+struct Lame {
+  double mu = 0.0;
+  double lambda = 0.0;
+};
+
+/// μ = E / (2(1+ν)), λ = E ν / ((1+ν)(1−2ν)), converted to N/mm².
+/// @throws ido::InvalidInput for E ≤ 0 or ν outside (−1, 0.5).
+[[nodiscard]] Lame lame_parameters(const ElasticMaterial& material);
+
+/// Von Mises equivalent stress of a symmetric stress tensor (same unit as @p sigma).
+[[nodiscard]] double von_mises(const Mat3& sigma);
+
+/// Signed volume (mm³) of tetrahedron (a, b, c, d): (b−a)·((c−a)×(d−a)) / 6.
+[[nodiscard]] double tet_signed_volume(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d);
+
+/// Rotation of the polar decomposition F = R S, by the iterative method of Müller, Bender,
+/// Chentanez & Macklin, "A Robust Method to Extract the Rotational Part of Deformations"
+/// (MIG 2016), started from @p q (updated in place with the result: warm start). Always a
+/// proper rotation, also for inverted (det F < 0) or degenerate F.
+[[nodiscard]] Mat3 extract_rotation(const Mat3& F, Eigen::Quaterniond& q, int max_iterations = 50);
+
+/// Common part of the tetrahedral FEM models: linear tetrahedra, deformation gradient
+/// F = D_s D_m⁻¹ (Sifakis & Barbič, "FEM Simulation of 3D Deformable Solids", SIGGRAPH 2012
+/// course), forces f = −V P(F) D_m⁻ᵀ, energy V Ψ(F). A concrete model gives Ψ, P and the
+/// stiffness of one element.
+class TetFemModel : public ForceModel {
+ public:
+  /// @p tets index particles; rest shape from @p rest_positions_mm (indexed like particles).
+  /// @throws ido::InvalidInput for bad indices, inverted or degenerate rest tetrahedra
+  /// (naming the element) or a bad material.
+  TetFemModel(std::vector<Tet> tets, std::span<const Vec3> rest_positions_mm,
+              const ElasticMaterial& material);
+
+  void add_forces(const Particles& particles, std::span<Vec3> forces_n,
+                  bool threaded) const override;
+  [[nodiscard]] double energy(const Particles& particles) const override;
+  [[nodiscard]] std::vector<BlockIndex> stiffness_pattern() const override;
+  void stiffness_blocks(const Particles& particles, std::span<Mat3> blocks,
+                        bool threaded) const override;
+  [[nodiscard]] std::optional<ElementFields> element_fields(const Particles&) const override;
+
+  /// Deformation gradient of each element at the current positions.
+  [[nodiscard]] std::vector<Mat3> deformation_gradients(const Particles& particles) const;
+  [[nodiscard]] const std::vector<Tet>& tets() const noexcept { return m_tets; }
+  [[nodiscard]] const Lame& lame() const noexcept { return m_lame; }
+  [[nodiscard]] double rest_volume_mm3(std::size_t e) const { return m_volume[e]; }
+
+ protected:
+  /// Energy density Ψ(F) in N/mm² (= mJ/mm³) of element @p e.
+  [[nodiscard]] virtual double energy_density(std::size_t e, const Mat3& F) const = 0;
+  /// First Piola–Kirchhoff stress P(F) in N/mm².
+  [[nodiscard]] virtual Mat3 first_piola(std::size_t e, const Mat3& F) const = 0;
+  /// The 16 blocks K_ab (a, b = 0..3, row-major) of element @p e; @p b holds the gradients
+  /// of the barycentric shape functions (F = Σ x_a b_aᵀ). The default differentiates
+  /// P with dP_dF() for exact stiffness.
+  virtual void element_stiffness(std::size_t e, const Mat3& F, const std::array<Vec3, 4>& b,
+                                 std::span<Mat3, 16> out) const;
+  /// Directional derivative of P at F along dF (N/mm²).
+  [[nodiscard]] virtual Mat3 dP_dF(std::size_t e, const Mat3& F, const Mat3& dF) const = 0;
+  /// Shape-function gradients of element e (1/mm).
+  [[nodiscard]] std::array<Vec3, 4> gradients(std::size_t e) const;
+  /// Called before a sweep over all elements at new positions (e.g. to refresh rotations).
+  virtual void update_state(const Particles& particles, bool threaded) const;
+
+  std::vector<Tet> m_tets;
+  std::vector<Mat3> m_dm_inv;     ///< D_m⁻¹ per element, 1/mm
+  std::vector<double> m_volume;   ///< rest volume per element, mm³
+  Lame m_lame;
+
+ private:
+  std::vector<std::int32_t> m_offsets;   // gather: per particle, element corner slots
+  std::vector<std::int32_t> m_sources;
+};
+
+}  // namespace ido::sim

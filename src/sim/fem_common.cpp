@@ -1,0 +1,195 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "ido/sim/fem_common.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "gather.h"
+#include "ido/core/error.h"
+#include "ido/core/parallel.h"
+#include "ido/sim/units.h"
+
+namespace ido::sim {
+
+Lame lame_parameters(const ElasticMaterial& m) {
+  if (!(m.youngs_modulus_pa > 0.0) || !std::isfinite(m.youngs_modulus_pa))
+    throw InvalidInput("material: Young's modulus must be positive, got " +
+                       std::to_string(m.youngs_modulus_pa) + " Pa");
+  if (!(m.poisson_ratio > -1.0 && m.poisson_ratio < 0.5))
+    throw InvalidInput("material: Poisson ratio must be in (-1, 0.5), got " +
+                       std::to_string(m.poisson_ratio));
+  const double e = m.youngs_modulus_pa * kPascalToNPerMm2, nu = m.poisson_ratio;
+  return {e / (2.0 * (1.0 + nu)), e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))};
+}
+
+double von_mises(const Mat3& sigma) {
+  const Mat3 sym = 0.5 * (sigma + sigma.transpose());
+  const Mat3 s = sym - sym.trace() / 3.0 * Mat3::Identity();
+  return std::sqrt(1.5 * s.cwiseProduct(s).sum());
+}
+
+double tet_signed_volume(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  return (b - a).dot((c - a).cross(d - a)) / 6.0;
+}
+
+Mat3 extract_rotation(const Mat3& F, Eigen::Quaterniond& q, int max_iterations) {
+  // Müller et al. 2016, Algorithm 1: rotate q by the axis-angle ω that aligns R's columns
+  // with F's columns, until ω vanishes.
+  for (int it = 0; it < max_iterations; ++it) {
+    const Mat3 r = q.toRotationMatrix();
+    const Vec3 omega = (r.col(0).cross(F.col(0)) + r.col(1).cross(F.col(1)) + r.col(2).cross(F.col(2))) *
+                       (1.0 / (std::abs(r.col(0).dot(F.col(0)) + r.col(1).dot(F.col(1)) +
+                                        r.col(2).dot(F.col(2))) + 1e-300));
+    const double w = omega.norm();
+    if (w < 1e-15) break;
+    q = Eigen::Quaterniond(Eigen::AngleAxisd(w, omega / w)) * q;
+    q.normalize();
+  }
+  return q.toRotationMatrix();
+}
+
+TetFemModel::TetFemModel(std::vector<Tet> tets, std::span<const Vec3> rest_positions_mm,
+                         const ElasticMaterial& material)
+    : m_tets(std::move(tets)), m_lame(lame_parameters(material)) {
+  if (m_tets.empty()) throw InvalidInput("FEM model: no tetrahedra");
+  m_dm_inv.resize(m_tets.size());
+  m_volume.resize(m_tets.size());
+  std::vector<std::int32_t> targets;
+  targets.reserve(4 * m_tets.size());
+  std::int32_t max_index = 0;
+  for (std::size_t e = 0; e < m_tets.size(); ++e) {
+    const auto& t = m_tets[e];
+    for (auto i : t) {
+      if (i < 0 || static_cast<std::size_t>(i) >= rest_positions_mm.size())
+        throw InvalidInput("FEM model: tetrahedron " + std::to_string(e) +
+                           " has a particle index out of range");
+      targets.push_back(i);
+      max_index = std::max(max_index, i);
+    }
+    const Vec3& x0 = rest_positions_mm[static_cast<std::size_t>(t[0])];
+    Mat3 dm;
+    for (int a = 1; a < 4; ++a) dm.col(a - 1) = rest_positions_mm[static_cast<std::size_t>(t[a])] - x0;
+    const double vol = dm.determinant() / 6.0;
+    if (!(vol > 0.0))
+      throw InvalidInput("FEM model: tetrahedron " + std::to_string(e) +
+                         (vol < 0.0 ? " is inverted in the rest shape" : " is degenerate in the rest shape"));
+    m_dm_inv[e] = dm.inverse();
+    m_volume[e] = vol;
+  }
+  detail::build_gather(targets, static_cast<std::size_t>(max_index + 1), m_offsets, m_sources);
+}
+
+std::array<Vec3, 4> TetFemModel::gradients(std::size_t e) const {
+  std::array<Vec3, 4> b;
+  for (int a = 1; a < 4; ++a) b[static_cast<std::size_t>(a)] = m_dm_inv[e].row(a - 1).transpose();
+  b[0] = -(b[1] + b[2] + b[3]);
+  return b;
+}
+
+void TetFemModel::update_state(const Particles&, bool) const {}
+
+std::vector<Mat3> TetFemModel::deformation_gradients(const Particles& particles) const {
+  const auto& x = particles.positions();
+  std::vector<Mat3> out(m_tets.size());
+  for (std::size_t e = 0; e < m_tets.size(); ++e) {
+    const auto& t = m_tets[e];
+    const Vec3& x0 = x[static_cast<std::size_t>(t[0])];
+    Mat3 ds;
+    for (int a = 1; a < 4; ++a) ds.col(a - 1) = x[static_cast<std::size_t>(t[static_cast<std::size_t>(a)])] - x0;
+    out[e] = ds * m_dm_inv[e];
+  }
+  return out;
+}
+
+namespace {
+Mat3 deformation_gradient(const std::vector<Vec3>& x, const Tet& t, const Mat3& dm_inv) {
+  const Vec3& x0 = x[static_cast<std::size_t>(t[0])];
+  Mat3 ds;
+  ds.col(0) = x[static_cast<std::size_t>(t[1])] - x0;
+  ds.col(1) = x[static_cast<std::size_t>(t[2])] - x0;
+  ds.col(2) = x[static_cast<std::size_t>(t[3])] - x0;
+  return ds * dm_inv;
+}
+}  // namespace
+
+void TetFemModel::add_forces(const Particles& particles, std::span<Vec3> forces_n,
+                             bool threaded) const {
+  update_state(particles, threaded);
+  const auto& x = particles.positions();
+  std::vector<Vec3> slots(4 * m_tets.size());
+  parallel_for(
+      m_tets.size(),
+      [&](std::size_t e) {
+        const Mat3 F = deformation_gradient(x, m_tets[e], m_dm_inv[e]);
+        const Mat3 h = -m_volume[e] * first_piola(e, F) * m_dm_inv[e].transpose();
+        slots[4 * e + 1] = h.col(0);
+        slots[4 * e + 2] = h.col(1);
+        slots[4 * e + 3] = h.col(2);
+        slots[4 * e] = -(h.col(0) + h.col(1) + h.col(2));
+      },
+      threaded, 512);
+  detail::gather_add(m_offsets, m_sources, slots, forces_n, threaded);
+}
+
+double TetFemModel::energy(const Particles& particles) const {
+  const auto& x = particles.positions();
+  std::vector<double> e_elem(m_tets.size());
+  for (std::size_t e = 0; e < m_tets.size(); ++e)
+    e_elem[e] = m_volume[e] * energy_density(e, deformation_gradient(x, m_tets[e], m_dm_inv[e]));
+  return detail::ordered_sum(e_elem);
+}
+
+std::vector<BlockIndex> TetFemModel::stiffness_pattern() const {
+  std::vector<BlockIndex> p;
+  p.reserve(16 * m_tets.size());
+  for (const auto& t : m_tets)
+    for (int a = 0; a < 4; ++a)
+      for (int b = 0; b < 4; ++b) p.push_back({t[static_cast<std::size_t>(a)], t[static_cast<std::size_t>(b)]});
+  return p;
+}
+
+void TetFemModel::element_stiffness(std::size_t e, const Mat3& F, const std::array<Vec3, 4>& b,
+                                    std::span<Mat3, 16> out) const {
+  // K_ab[:, j] = V dP(e_j b_bᵀ) b_a, since f_a = −V P b_a.
+  for (int bb = 0; bb < 4; ++bb)
+    for (int j = 0; j < 3; ++j) {
+      const Mat3 dF = Vec3::Unit(j) * b[static_cast<std::size_t>(bb)].transpose();
+      const Mat3 dP = dP_dF(e, F, dF);
+      for (int a = 0; a < 4; ++a)
+        out[static_cast<std::size_t>(4 * a + bb)].col(j) = m_volume[e] * (dP * b[static_cast<std::size_t>(a)]);
+    }
+}
+
+void TetFemModel::stiffness_blocks(const Particles& particles, std::span<Mat3> blocks,
+                                   bool threaded) const {
+  update_state(particles, threaded);
+  const auto& x = particles.positions();
+  parallel_for(
+      m_tets.size(),
+      [&](std::size_t e) {
+        const Mat3 F = deformation_gradient(x, m_tets[e], m_dm_inv[e]);
+        element_stiffness(e, F, gradients(e), std::span<Mat3, 16>(blocks.data() + 16 * e, 16));
+      },
+      threaded, 256);
+}
+
+std::optional<ElementFields> TetFemModel::element_fields(const Particles& particles) const {
+  const auto& x = particles.positions();
+  ElementFields out;
+  out.green_strain.resize(m_tets.size());
+  out.cauchy_stress_pa.resize(m_tets.size());
+  out.von_mises_pa.resize(m_tets.size());
+  for (std::size_t e = 0; e < m_tets.size(); ++e) {
+    const Mat3 F = deformation_gradient(x, m_tets[e], m_dm_inv[e]);
+    out.green_strain[e] = 0.5 * (F.transpose() * F - Mat3::Identity());
+    const double j = F.determinant();
+    const Mat3 pft = first_piola(e, F) * F.transpose();
+    const Mat3 sigma = (std::abs(j) > 1e-12 ? pft / j : pft) / kPascalToNPerMm2;
+    out.cauchy_stress_pa[e] = 0.5 * (sigma + sigma.transpose());
+    out.von_mises_pa[e] = von_mises(out.cauchy_stress_pa[e]);
+  }
+  return out;
+}
+
+}  // namespace ido::sim

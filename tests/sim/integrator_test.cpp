@@ -1,0 +1,152 @@
+// SPDX-License-Identifier: Apache-2.0
+#include <cmath>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include "ido/core/error.h"
+#include "ido/sim/fem_corotational.h"
+#include "sim_test_support.h"
+#include "support/test_support.h"
+
+namespace ido {
+namespace {
+
+double oscillator_error(const std::string& scheme, int steps) {
+  auto w = test::harmonic_oscillator();
+  w.set_integrator(scheme);
+  w.implicit_options().cg_tolerance = 1e-15;
+  const double dt = 1.0 / steps;
+  for (int s = 0; s < steps; ++s) w.step(dt);
+  const double t = w.time_s();
+  const double ex = 10.0 + std::cos(t), ev = -std::sin(t);
+  return std::abs(w.particles().positions()[1].x() - ex) +
+         std::abs(w.particles().velocities()[1].x() - ev);
+}
+
+struct OrderCase {
+  const char* scheme;
+  double order;
+  int steps;
+};
+
+class ConvergenceOrder : public ::testing::TestWithParam<OrderCase> {};
+
+TEST_P(ConvergenceOrder, MatchesTheory) {
+  const auto c = GetParam();
+  const double e1 = oscillator_error(c.scheme, c.steps);
+  const double e2 = oscillator_error(c.scheme, 2 * c.steps);
+  const double e3 = oscillator_error(c.scheme, 4 * c.steps);
+  EXPECT_TRUE(test::near(std::log2(e1 / e2), c.order, 0.2)) << c.scheme;
+  EXPECT_TRUE(test::near(std::log2(e2 / e3), c.order, 0.2)) << c.scheme;
+}
+
+INSTANTIATE_TEST_SUITE_P(HarmonicOscillator, ConvergenceOrder,
+                         ::testing::Values(OrderCase{"explicit_euler", 1.0, 200},
+                                           OrderCase{"symplectic_euler", 1.0, 200},
+                                           OrderCase{"velocity_verlet", 2.0, 50},
+                                           OrderCase{"rk4", 4.0, 10},
+                                           OrderCase{"implicit_euler", 1.0, 200}),
+                         [](const auto& param_info) { return std::string(param_info.param.scheme); });
+
+TEST(IntegratorRegistry, UnknownNameIsRejectedWithTheKnownOnes) {
+  sim::World w;
+  try {
+    w.set_integrator("leapfrog");
+    FAIL() << "no exception";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("leapfrog"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("rk4"), std::string::npos);
+  }
+  EXPECT_THROW(w.step(0.0), InvalidInput);
+  EXPECT_THROW(w.step(-1.0), InvalidInput);
+}
+
+TEST(IntegratorRegistry, UserSchemeIsCalledAndSwitchingKeepsState) {
+  // Reference: 20 RK4 steps then 20 symplectic Euler steps.
+  auto ref = test::harmonic_oscillator();
+  ref.set_integrator("rk4");
+  for (int i = 0; i < 20; ++i) ref.step(0.01);
+  const Vec3 x_mid = ref.particles().positions()[1];
+  ref.set_integrator("symplectic_euler");
+  EXPECT_EQ(ref.particles().positions()[1], x_mid);  // switching touches nothing
+  for (int i = 0; i < 20; ++i) ref.step(0.01);
+
+  // Same run, but the second half through a user-registered copy of symplectic Euler.
+  auto w = test::harmonic_oscillator();
+  int calls = 0;
+  w.integrators().add("my_symplectic", [&calls](sim::World& world, double dt) {
+    ++calls;
+    world.compute_forces();
+    const auto a = world.accelerations();
+    auto& p = world.particles();
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      if (p.fixed(i)) continue;
+      p.velocities()[i] += dt * a[i];
+      p.positions()[i] += dt * p.velocities()[i];
+    }
+  });
+  w.set_integrator("rk4");
+  for (int i = 0; i < 20; ++i) w.step(0.01);
+  w.set_integrator("my_symplectic");
+  for (int i = 0; i < 20; ++i) w.step(0.01);
+  EXPECT_EQ(calls, 20);
+  EXPECT_TRUE(test::near(w.particles().positions()[1].x(), ref.particles().positions()[1].x(), 0.0));
+  EXPECT_TRUE(test::near(w.particles().velocities()[1].x(), ref.particles().velocities()[1].x(), 0.0));
+  EXPECT_TRUE(test::near(w.time_s(), 0.4, 1e-12));
+}
+
+sim::World beam_world(bool threaded) {
+  sim::World w;
+  w.set_threaded(threaded);
+  const auto mesh = sim::make_beam({40, 10, 10}, {16, 4, 4});
+  w.add_tet_body(mesh, 1000.0);
+  w.emplace_model<sim::CorotationalFem>(mesh.tets, w.particles().positions(),
+                                        sim::ElasticMaterial{1e6, 0.45});
+  for (std::size_t i = 0; i < w.particles().size(); ++i)
+    if (w.particles().positions()[i].x() < 1e-9) w.particles().set_fixed(i, true);
+  w.external().gravity_mm_s2 = Vec3(0, 0, -9810);
+  w.set_integrator("implicit_euler");
+  return w;
+}
+
+std::vector<Vec3> run_beam(bool threaded, int steps) {
+  auto w = beam_world(threaded);
+  for (int i = 0; i < steps; ++i) w.step(0.01);
+  EXPECT_GT(w.last_step().cg_iterations, 0);
+  return w.particles().positions();
+}
+
+TEST(WorldDeterminism, ThreadedAndConcurrentWorldsMatchSerial) {
+  const auto serial = run_beam(false, 10);
+  const auto threaded = run_beam(true, 10);
+  std::vector<Vec3> a, b;
+  std::thread t1([&] { a = run_beam(true, 10); });
+  std::thread t2([&] { b = run_beam(false, 10); });
+  t1.join();
+  t2.join();
+  double max_diff = 0.0;
+  for (std::size_t i = 0; i < serial.size(); ++i)
+    max_diff = std::max({max_diff, (serial[i] - threaded[i]).norm(), (serial[i] - a[i]).norm(),
+                         (serial[i] - b[i]).norm()});
+  EXPECT_TRUE(test::near(max_diff, 0.0, 0.0));
+  // and the beam really moved (sagged under gravity)
+  double min_z = 1e9;
+  for (const auto& x : serial) min_z = std::min(min_z, x.z());
+  EXPECT_LT(min_z, -0.01);
+}
+
+TEST(ImplicitEuler, FixedParticlesStayAndCgReportsIterations) {
+  auto w = beam_world(true);
+  const auto x0 = w.particles().positions();
+  for (int i = 0; i < 5; ++i) w.step(0.01);
+  for (std::size_t i = 0; i < x0.size(); ++i)
+    if (w.particles().fixed(i)) {
+      EXPECT_EQ(w.particles().positions()[i], x0[i]);
+    }
+  EXPECT_GT(w.last_step().cg_iterations, 0);
+  EXPECT_LE(w.last_step().cg_relative_residual, w.implicit_options().cg_tolerance);
+}
+
+}  // namespace
+}  // namespace ido
