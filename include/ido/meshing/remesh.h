@@ -1,0 +1,83 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "ido/core/math.h"
+#include "ido/geometry/triangle_mesh.h"
+
+namespace ido::meshing {
+
+/// Tunables of isotropic surface remeshing (Botsch & Kobbelt, "A remeshing approach to
+/// multiresolution modeling", SGP 2004): edges longer than split_ratio · target are split,
+/// shorter than collapse_ratio · target are collapsed, edges are flipped towards valence 6.
+struct RemeshOptions {
+  double target_edge_mm = 1.0;        ///< wanted edge length (mm), > 0
+  double split_ratio = 4.0 / 3.0;     ///< split edges longer than this × target
+  double collapse_ratio = 4.0 / 5.0;  ///< collapse edges shorter than this × target
+  int iterations = 3;                 ///< split / collapse / flip / relax rounds
+  bool flip = true;                   ///< flip edges to even valences
+  bool relax = true;                  ///< tangential relaxation after each round
+  double relax_weight = 0.5;          ///< fraction of the step to the neighbours' centroid
+};
+
+/// Counts of the local operations one call performed.
+struct RemeshStats {
+  std::int64_t splits = 0;
+  std::int64_t collapses = 0;
+  std::int64_t flips = 0;
+};
+
+/// A stateful remesher for repeated use on a closed, oriented, 2-manifold triangle mesh
+/// (the balloon calls it every few steps). Every operation keeps the mesh closed, edge- and
+/// vertex-manifold and consistently oriented: a split replaces the two triangles of an edge
+/// by four; a collapse is done only when the link condition holds (the endpoints share
+/// exactly the two opposite vertices) and no incident triangle turns over; a flip only when
+/// the new edge does not exist yet and the two new triangles face the old way. Each vertex
+/// carries a `locked` flag: locked vertices never move and are never collapsed away (the
+/// balloon locks frozen vertices); a vertex created by splitting an edge is locked when both
+/// ends are. Written by hand (the operations are the project's own).
+class SurfaceRemesher {
+ public:
+  /// Takes a closed 2-manifold oriented mesh. @p locked is empty or one flag per vertex.
+  /// @throws ido::InvalidInput if an edge has other than two triangles, an index is out of
+  /// range, a triangle is degenerate in its indices, or locked has the wrong size.
+  explicit SurfaceRemesher(const geometry::TriangleMesh& mesh, std::vector<std::uint8_t> locked = {});
+
+  /// Splits every edge longer than @p max_length_mm at its midpoint, longest first (edges
+  /// created by a split are considered again in the same call). Returns the split count.
+  std::int64_t split_long_edges(double max_length_mm);
+  /// Collapses edges shorter than @p min_length_mm to their midpoint (or onto a locked
+  /// end), shortest first, refusing collapses that would create an edge longer than
+  /// @p max_length_mm. Returns the collapse count.
+  std::int64_t collapse_short_edges(double min_length_mm, double max_length_mm);
+  /// Flips edges when that brings the four vertices' valences closer to 6. Returns the count.
+  std::int64_t flip_edges();
+  /// Moves every unlocked vertex by @p weight towards the centroid of its neighbours,
+  /// within its tangent plane (area-uniform relaxation).
+  void relax_tangentially(double weight);
+  /// Runs the full schedule of @p options.
+  RemeshStats remesh(const RemeshOptions& options);
+
+  /// Current mesh, renumbered without deleted vertices and triangles.
+  [[nodiscard]] geometry::TriangleMesh mesh() const;
+  /// Locked flags in the numbering of mesh().
+  [[nodiscard]] std::vector<std::uint8_t> locked() const;
+
+ private:
+  struct Impl;
+  std::vector<Vec3> m_vertices;
+  std::vector<Tri> m_triangles;
+  std::vector<std::uint8_t> m_vertex_alive;
+  std::vector<std::uint8_t> m_triangle_alive;
+  std::vector<std::uint8_t> m_locked;
+  std::vector<std::vector<std::int32_t>> m_vertex_triangles;
+  std::int64_t m_alive_vertices = 0;
+};
+
+/// One-call isotropic remeshing: returns a closed 2-manifold mesh with edges near
+/// options.target_edge_mm. @throws ido::InvalidInput as SurfaceRemesher.
+[[nodiscard]] geometry::TriangleMesh remesh(const geometry::TriangleMesh& mesh,
+                                            const RemeshOptions& options = {});
+
+}  // namespace ido::meshing

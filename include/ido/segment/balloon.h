@@ -1,0 +1,120 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "ido/core/math.h"
+#include "ido/core/progress.h"
+#include "ido/geometry/triangle_mesh.h"
+#include "ido/image/volume.h"
+#include "ido/segment/balloon_forces.h"
+#include "ido/segment/intensity_model.h"
+#include "ido/sim/particles.h"
+
+namespace ido::segment {
+
+/// Tunables of the balloon. Lengths in voxels are multiples of the smallest spacing h.
+struct BalloonOptions {
+  std::optional<double> reference;  ///< organ grey level; estimated at the seeds if unset
+  std::optional<double> tolerance;  ///< accepted band half-width; estimated if unset
+  IntensityEstimateOptions estimate;  ///< how to estimate what is unset
+  double seed_radius_voxels = 1.0;    ///< initial icosphere radius (≈ 2 voxels across)
+  double smoothing_sigma_voxels = 0.7;  ///< Gaussian pre-smoothing of the image (× h)
+  double edge_length_voxels = 1.0;      ///< target edge length of the surface (× h)
+  double step_voxels = 0.5;             ///< largest displacement per step (× h)
+  BalloonForceWeights weights;          ///< inflation and curvature stiffness
+  double tangential_weight = 0.3;       ///< tangential umbrella relaxation per step
+  int remesh_interval = 3;              ///< refine every this many steps
+  int intersection_interval = 10;       ///< look for self-intersections every this many steps
+  int max_iterations = 4000;            ///< safeguard
+  double max_volume_mm3 = INFINITY;     ///< safeguard; reaching it raises the leak warning
+  /// Optional region of interest (world mm, axis-aligned {min, max}): outside it the
+  /// balloon deflates. A user safeguard, not the leak-stopping mechanism.
+  std::optional<std::array<Vec3, 2>> roi_mm;
+  int convergence_window = 20;          ///< steps between volume comparisons
+  double convergence_rel_volume = 2e-3; ///< converged when |ΔV| / V over a window is below
+  bool edge_refinement = true;          ///< final snap to the wall (edge attraction)
+  int edge_iterations = 30;             ///< steps of the edge stage
+  double edge_search_voxels = 1.5;      ///< edge profile half-length (× h)
+  bool threaded = true;                 ///< oneTBB for the per-vertex work
+};
+
+/// What a balloon run did and what it produced.
+struct BalloonReport {
+  IntensityModel model;             ///< reference and tolerance used
+  std::int64_t iterations = 0;      ///< inflation + edge steps
+  double seconds = 0;               ///< wall-clock time of the run
+  double volume_mm3 = 0, area_mm2 = 0;
+  std::int64_t vertices = 0, edges = 0, triangles = 0, euler_characteristic = 0, components = 0;
+  bool closed = false, manifold = false, oriented = false;
+  std::int64_t self_intersections = 0;  ///< of the output (0 by construction)
+  std::int64_t repairs = 0;             ///< topology repairs performed
+  std::int64_t frozen_vertices = 0;     ///< vertices frozen at intersections (cumulative)
+  bool converged = false;
+  bool leak_warning = false;  ///< the volume kept growing until a safeguard stopped it
+  std::string stop_reason;    ///< "converged", "max_iterations" or "max_volume"
+};
+
+/// A surface and its report.
+struct BalloonResult {
+  geometry::TriangleMesh surface;
+  BalloonReport report;
+};
+
+/// The balloon of Turini et al. (2007): a small icosphere at each seed whose vertices are
+/// sim::Particles, inflated along its normals by an intensity-matching force that turns into
+/// deflation beyond the tolerance, held smooth by tangential umbrella relaxation and a
+/// curvature stiffness (which stops it squeezing through 1–2-voxel necks), refined so edges
+/// stay voxel-sized (meshing::SurfaceRemesher), with self-intersections found every few
+/// steps, their vertices frozen, and the surface rebuilt through a signed distance map
+/// (repair_topology), so it takes the organ's topology. Integration: explicit Euler on the
+/// overdamped (first-order) equation of motion, v = F / γ, displacement capped at
+/// step_voxels · h. After convergence an edge stage snaps the surface to the wall.
+/// The caller may drive it step by step (step()) or call run().
+class Balloon {
+ public:
+  /// @throws ido::InvalidInput when the volume is empty, there is no seed, a seed lies
+  /// outside the volume, or an option is out of range (tolerance ≤ 0, ...).
+  Balloon(const image::Volume<float>& ct, const std::vector<Vec3>& seeds_mm, const BalloonOptions& options = {});
+  Balloon(Balloon&&) noexcept;
+  Balloon& operator=(Balloon&&) noexcept;
+  ~Balloon();
+
+  /// One inflation step (with refinement / intersection handling when due). Returns true
+  /// once converged or stopped by a safeguard.
+  bool step();
+  /// Runs step() until it returns true, then the edge stage and a final repair that
+  /// guarantees a closed, manifold, non-self-intersecting output.
+  BalloonResult run(Progress* progress = nullptr);
+
+  /// The particles that are the surface's vertices (positions mm, velocities mm/step).
+  [[nodiscard]] const sim::Particles& particles() const;
+  /// The current surface.
+  [[nodiscard]] geometry::TriangleMesh surface() const;
+  [[nodiscard]] const IntensityModel& model() const;
+
+ private:
+  struct State;
+  std::unique_ptr<State> m;
+};
+
+/// One-call balloon segmentation. See Balloon.
+[[nodiscard]] BalloonResult segment_balloon(const image::Volume<float>& ct, const std::vector<Vec3>& seeds_mm,
+                                            const BalloonOptions& options = {}, Progress* progress = nullptr);
+
+/// Binary mask (1 inside) of a closed surface on the grid of @p grid (same size, spacing,
+/// origin, direction): a voxel is inside when its centre has generalised winding number
+/// > 0.5. @throws ido::InvalidInput on an empty grid.
+[[nodiscard]] image::Volume<std::uint8_t> surface_to_mask(const geometry::TriangleMesh& surface,
+                                                          const image::Volume<float>& grid,
+                                                          bool threaded = true);
+
+/// An icosphere (subdivided icosahedron, vertices projected to the sphere): closed,
+/// outward-oriented, 10·4^s + 2 vertices.
+[[nodiscard]] geometry::TriangleMesh balloon_icosphere(const Vec3& centre_mm, double radius_mm, int subdivisions);
+
+}  // namespace ido::segment

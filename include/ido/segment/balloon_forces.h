@@ -1,0 +1,70 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+#include <optional>
+#include <vector>
+
+#include "ido/core/math.h"
+#include "ido/image/volume.h"
+#include "ido/segment/intensity_model.h"
+
+namespace ido::segment {
+
+/// Per-vertex differential quantities of a closed triangle surface that the balloon's
+/// forces use.
+struct SurfaceDifferentials {
+  std::vector<Vec3> normals;         ///< unit outward normals (area-weighted average)
+  std::vector<Vec3> umbrella_mm;     ///< L_i = mean of the one-ring − x_i (mm)
+  std::vector<double> mean_edge2_mm2;  ///< mean squared length of the edges at i (mm²)
+};
+
+/// Computes normals, umbrella vectors and mean squared edge lengths of a closed, oriented
+/// manifold surface in O(V + F). On such a surface each neighbour of i follows i exactly
+/// once in its triangles, which is how the one-ring is gathered.
+[[nodiscard]] SurfaceDifferentials surface_differentials(const std::vector<Vec3>& positions_mm,
+                                                         const std::vector<Tri>& triangles);
+
+/// Mean curvature (1/mm) estimated from the umbrella operator: on a sphere of radius R with
+/// edge length ℓ the one-ring centroid lies ℓ²/(2R) inside the vertex, so
+/// H ≈ −2 (L·n) / ℓ² (positive where the surface is convex; Desbrun et al., "Implicit
+/// fairing of irregular meshes", SIGGRAPH 1999, for the umbrella operator).
+[[nodiscard]] inline double umbrella_mean_curvature(const Vec3& umbrella_mm, const Vec3& normal,
+                                                    double mean_edge2_mm2) noexcept {
+  return mean_edge2_mm2 > 0 ? -2.0 * umbrella_mm.dot(normal) / mean_edge2_mm2 : 0.0;
+}
+
+/// Tangential part of the umbrella vector: moves a vertex towards the centre of its one-ring
+/// within the tangent plane, evening the sampling without shrinking the surface.
+[[nodiscard]] inline Vec3 tangential_umbrella(const Vec3& umbrella_mm, const Vec3& normal) noexcept {
+  return umbrella_mm - normal * normal.dot(umbrella_mm);
+}
+
+/// Weights of the balloon's normal speed, in units of the smallest voxel spacing h per step.
+struct BalloonForceWeights {
+  double inflation = 1.0;  ///< × inflation_speed(I) (dimensionless speed in [−1, 1])
+  /// Surface stiffness: the speed is reduced by curvature × h × H, so a front whose radius
+  /// of curvature is below h · curvature / speed cannot advance: a 1–2-voxel neck stops it.
+  double curvature = 0.6;
+};
+
+/// The balloon's normal speed (voxels per step, before the step size): inflation by
+/// intensity match minus curvature stiffness, w_i · s(I) − w_c · h · H.
+[[nodiscard]] inline double balloon_normal_speed(double intensity, double mean_curvature_per_mm,
+                                                 double h_mm, const IntensityModel& model,
+                                                 const BalloonForceWeights& w) noexcept {
+  return w.inflation * inflation_speed(intensity, model) - w.curvature * h_mm * mean_curvature_per_mm;
+}
+
+/// Edge attraction by a profile search: samples @p smoothed along the normal at offsets
+/// t ∈ [−search_mm, search_mm] (step step_mm) and returns the offset (mm) where the
+/// departure from the reference, |I − reference|, rises fastest outward — the organ's wall,
+/// which for a blurred step lies where the intensity is half-way between organ and
+/// neighbour. Returns nothing when the strongest rise is below @p min_rise_per_mm
+/// (intensity units per mm), i.e. when there is no wall within reach. The rise is measured
+/// over @p window_mm (about a voxel; 0 = step_mm), see the implementation note.
+[[nodiscard]] std::optional<double> edge_offset_along_normal(const image::Volume<float>& smoothed,
+                                                             const Vec3& point_mm, const Vec3& normal,
+                                                             const IntensityModel& model, double search_mm,
+                                                             double step_mm, double min_rise_per_mm,
+                                                             double window_mm = 0.0);
+
+}  // namespace ido::segment

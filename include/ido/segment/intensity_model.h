@@ -1,0 +1,43 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+#include <vector>
+
+#include "ido/core/math.h"
+#include "ido/image/volume.h"
+
+namespace ido::segment {
+
+/// What the balloon looks for: the grey level of the organ and how far from it a voxel may
+/// be and still belong to it (both in the image's intensity units, e.g. HU).
+struct IntensityModel {
+  double reference = 0.0;  ///< organ grey level
+  double tolerance = 1.0;  ///< half-width of the accepted band, > 0
+};
+
+/// Tunables of estimate_intensity_model().
+struct IntensityEstimateOptions {
+  double radius_mm = 0.0;           ///< ball around each seed; 0 = 2 × the largest spacing
+  double tolerance_sigmas = 2.5;    ///< tolerance = this × robust σ (1.4826 · MAD)
+  double min_tolerance_fraction = 0.05;  ///< lower bound: this × |reference|, so a flat
+                                         ///< (noise-free) region still gets a usable band
+};
+
+/// Estimates the reference as the median of the voxels within radius_mm of the seeds (all
+/// seeds pooled) and the tolerance as tolerance_sigmas × 1.4826 × MAD (median absolute
+/// deviation; Rousseeuw & Croux, JASA 1993) — robust against a seed placed near the wall.
+/// @throws ido::InvalidInput when there is no seed, a seed lies outside the volume, or the
+/// volume is empty.
+[[nodiscard]] IntensityModel estimate_intensity_model(const image::Volume<float>& ct,
+                                                      const std::vector<Vec3>& seeds_mm,
+                                                      const IntensityEstimateOptions& options = {});
+
+/// The balloon's inflation speed for a vertex seeing @p intensity: 1 − |I − reference| /
+/// tolerance, clamped to [−1, 1]. Positive (inflate) inside the band, largest at the
+/// reference, negative (deflate) beyond the tolerance on either side — the paper's force
+/// "inversely related to the grey-level difference" (Turini et al. 2007).
+[[nodiscard]] inline double inflation_speed(double intensity, const IntensityModel& model) noexcept {
+  const double s = 1.0 - std::abs(intensity - model.reference) / model.tolerance;
+  return s > 1.0 ? 1.0 : (s < -1.0 ? -1.0 : s);
+}
+
+}  // namespace ido::segment

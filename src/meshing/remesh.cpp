@@ -1,0 +1,392 @@
+// SPDX-License-Identifier: Apache-2.0
+// Isotropic surface remeshing by local operations, after Botsch & Kobbelt (SGP 2004).
+// Written by hand for ido: an indexed triangle list with vertex→triangle incidence lists,
+// which is all split / collapse / flip need on a closed manifold.
+#include "ido/meshing/remesh.h"
+
+#include <algorithm>
+#include <cmath>
+#include <queue>
+#include <string>
+#include <unordered_map>
+
+#include "ido/core/error.h"
+
+namespace ido::meshing {
+
+namespace {
+
+std::uint64_t edge_key(std::int32_t a, std::int32_t b) {
+  if (a > b) std::swap(a, b);
+  return (std::uint64_t(std::uint32_t(a)) << 32) | std::uint32_t(b);
+}
+
+Vec3 tri_normal(const Vec3& a, const Vec3& b, const Vec3& c) { return (b - a).cross(c - a); }
+
+}  // namespace
+
+struct SurfaceRemesher::Impl {
+  // Triangles holding both a and b (at most a few on a manifold: exactly 2).
+  static int edge_triangles(const SurfaceRemesher& r, std::int32_t a, std::int32_t b,
+                            std::int32_t out[2]) {
+    int n = 0;
+    for (std::int32_t t : r.m_vertex_triangles[a]) {
+      const Tri& tr = r.m_triangles[t];
+      if (tr[0] == b || tr[1] == b || tr[2] == b) {
+        if (n < 2) out[n] = t;
+        ++n;
+      }
+    }
+    return n;
+  }
+  // Vertex of triangle t that is neither a nor b.
+  static std::int32_t opposite(const Tri& t, std::int32_t a, std::int32_t b) {
+    for (std::int32_t v : t)
+      if (v != a && v != b) return v;
+    return -1;
+  }
+  // True when triangle t runs a→b (in its cyclic order).
+  static bool runs(const Tri& t, std::int32_t a, std::int32_t b) {
+    for (int k = 0; k < 3; ++k)
+      if (t[k] == a && t[(k + 1) % 3] == b) return true;
+    return false;
+  }
+  static void neighbours(const SurfaceRemesher& r, std::int32_t v, std::vector<std::int32_t>& out) {
+    out.clear();
+    for (std::int32_t t : r.m_vertex_triangles[v])
+      for (std::int32_t w : r.m_triangles[t])
+        if (w != v) out.push_back(w);
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+  }
+  static void remove_incidence(SurfaceRemesher& r, std::int32_t v, std::int32_t t) {
+    auto& l = r.m_vertex_triangles[v];
+    auto it = std::find(l.begin(), l.end(), t);
+    if (it != l.end()) {
+      *it = l.back();
+      l.pop_back();
+    }
+  }
+  static std::int32_t add_triangle(SurfaceRemesher& r, const Tri& t) {
+    const auto id = static_cast<std::int32_t>(r.m_triangles.size());
+    r.m_triangles.push_back(t);
+    r.m_triangle_alive.push_back(1);
+    for (std::int32_t v : t) r.m_vertex_triangles[v].push_back(id);
+    return id;
+  }
+  static void replace_in_triangle(SurfaceRemesher& r, std::int32_t t, std::int32_t from,
+                                  std::int32_t to) {
+    Tri& tr = r.m_triangles[t];
+    for (auto& v : tr)
+      if (v == from) v = to;
+    remove_incidence(r, from, t);
+    r.m_vertex_triangles[to].push_back(t);
+  }
+  static std::int32_t add_vertex(SurfaceRemesher& r, const Vec3& p, std::uint8_t locked) {
+    const auto id = static_cast<std::int32_t>(r.m_vertices.size());
+    r.m_vertices.push_back(p);
+    r.m_vertex_alive.push_back(1);
+    r.m_locked.push_back(locked);
+    r.m_vertex_triangles.emplace_back();
+    ++r.m_alive_vertices;
+    return id;
+  }
+};
+
+SurfaceRemesher::SurfaceRemesher(const geometry::TriangleMesh& mesh, std::vector<std::uint8_t> locked)
+    : m_vertices(mesh.vertices), m_triangles(mesh.triangles) {
+  const auto nv = static_cast<std::int64_t>(m_vertices.size());
+  if (!locked.empty() && static_cast<std::int64_t>(locked.size()) != nv)
+    throw InvalidInput("remesh: locked flags must be empty or one per vertex (" +
+                       std::to_string(nv) + "), got " + std::to_string(locked.size()));
+  m_locked = locked.empty() ? std::vector<std::uint8_t>(m_vertices.size(), 0) : std::move(locked);
+  m_vertex_alive.assign(m_vertices.size(), 1);
+  m_triangle_alive.assign(m_triangles.size(), 1);
+  m_vertex_triangles.assign(m_vertices.size(), {});
+  m_alive_vertices = nv;
+  std::unordered_map<std::uint64_t, int> directed;
+  directed.reserve(m_triangles.size() * 3);
+  for (std::size_t t = 0; t < m_triangles.size(); ++t) {
+    const Tri& tr = m_triangles[t];
+    for (int k = 0; k < 3; ++k) {
+      if (tr[k] < 0 || tr[k] >= nv)
+        throw InvalidInput("remesh: triangle " + std::to_string(t) + " has a vertex index out of range");
+      m_vertex_triangles[tr[k]].push_back(static_cast<std::int32_t>(t));
+    }
+    if (tr[0] == tr[1] || tr[1] == tr[2] || tr[0] == tr[2])
+      throw InvalidInput("remesh: triangle " + std::to_string(t) + " repeats a vertex");
+    for (int k = 0; k < 3; ++k) {
+      const std::int32_t a = tr[k], b = tr[(k + 1) % 3];
+      // +1 for a<b direction, +16 for the other: a closed oriented manifold edge gives 17.
+      directed[edge_key(a, b)] += a < b ? 1 : 16;
+    }
+  }
+  for (const auto& [key, count] : directed)
+    if (count != 17)
+      throw InvalidInput("remesh: the mesh is not a closed, consistently oriented 2-manifold (edge " +
+                         std::to_string(key >> 32) + "-" + std::to_string(key & 0xffffffffu) + ")");
+}
+
+std::int64_t SurfaceRemesher::split_long_edges(double max_length_mm) {
+  using Item = std::pair<double, std::uint64_t>;
+  std::priority_queue<Item> queue;  // longest first
+  const double max2 = max_length_mm * max_length_mm;
+  auto push_edges_of = [&](std::int32_t t) {
+    const Tri& tr = m_triangles[t];
+    for (int k = 0; k < 3; ++k) {
+      const std::int32_t a = tr[k], b = tr[(k + 1) % 3];
+      if (a > b) continue;  // each edge once per triangle pair suffices (the twin has a>b)
+      const double l2 = (m_vertices[a] - m_vertices[b]).squaredNorm();
+      if (l2 > max2) queue.emplace(l2, edge_key(a, b));
+    }
+  };
+  for (std::size_t t = 0; t < m_triangles.size(); ++t)
+    if (m_triangle_alive[t]) push_edges_of(static_cast<std::int32_t>(t));
+  std::int64_t count = 0;
+  while (!queue.empty()) {
+    const auto [l2, key] = queue.top();
+    queue.pop();
+    const auto a = static_cast<std::int32_t>(key >> 32);
+    const auto b = static_cast<std::int32_t>(key & 0xffffffffu);
+    if (!m_vertex_alive[a] || !m_vertex_alive[b]) continue;
+    if (std::abs((m_vertices[a] - m_vertices[b]).squaredNorm() - l2) > 1e-12 * l2) continue;
+    std::int32_t ts[2];
+    if (Impl::edge_triangles(*this, a, b, ts) != 2) continue;
+    // Orient: t1 runs a→b, t2 runs b→a.
+    std::int32_t t1 = ts[0], t2 = ts[1];
+    if (!Impl::runs(m_triangles[t1], a, b)) std::swap(t1, t2);
+    const std::int32_t c = Impl::opposite(m_triangles[t1], a, b);
+    const std::int32_t d = Impl::opposite(m_triangles[t2], a, b);
+    const std::int32_t m = Impl::add_vertex(*this, 0.5 * (m_vertices[a] + m_vertices[b]),
+                                            std::uint8_t(m_locked[a] && m_locked[b]));
+    // t1 (a,b,c) → (a,m,c) + (m,b,c); t2 (b,a,d) → (b,m,d) + (m,a,d).
+    Impl::replace_in_triangle(*this, t1, b, m);
+    const std::int32_t n1 = Impl::add_triangle(*this, Tri{m, b, c});
+    Impl::replace_in_triangle(*this, t2, a, m);
+    const std::int32_t n2 = Impl::add_triangle(*this, Tri{m, a, d});
+    for (std::int32_t t : {t1, t2, n1, n2}) push_edges_of(t);
+    // push_edges_of only pushes a<b edges of each triangle: push m's edges explicitly too.
+    for (std::int32_t w : {a, b, c, d}) {
+      const double e2 = (m_vertices[m] - m_vertices[w]).squaredNorm();
+      if (e2 > max2) queue.emplace(e2, edge_key(m, w));
+    }
+    ++count;
+  }
+  return count;
+}
+
+std::int64_t SurfaceRemesher::collapse_short_edges(double min_length_mm, double max_length_mm) {
+  using Item = std::pair<double, std::uint64_t>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;  // shortest first
+  const double min2 = min_length_mm * min_length_mm;
+  const double max2 = max_length_mm * max_length_mm;
+  for (std::size_t t = 0; t < m_triangles.size(); ++t) {
+    if (!m_triangle_alive[t]) continue;
+    const Tri& tr = m_triangles[t];
+    for (int k = 0; k < 3; ++k) {
+      const std::int32_t a = tr[k], b = tr[(k + 1) % 3];
+      if (a > b) continue;
+      const double l2 = (m_vertices[a] - m_vertices[b]).squaredNorm();
+      if (l2 < min2) queue.emplace(l2, edge_key(a, b));
+    }
+  }
+  std::int64_t count = 0;
+  std::vector<std::int32_t> na, nb, common;
+  while (!queue.empty() && m_alive_vertices > 4) {
+    const auto [l2, key] = queue.top();
+    queue.pop();
+    std::int32_t a = static_cast<std::int32_t>(key >> 32);
+    std::int32_t b = static_cast<std::int32_t>(key & 0xffffffffu);
+    if (!m_vertex_alive[a] || !m_vertex_alive[b]) continue;
+    const double cur2 = (m_vertices[a] - m_vertices[b]).squaredNorm();
+    if (cur2 >= min2) continue;
+    if (m_locked[a] && m_locked[b]) continue;
+    std::int32_t ts[2];
+    if (Impl::edge_triangles(*this, a, b, ts) != 2) continue;
+    // Link condition: the endpoints' common neighbours are exactly the two opposite vertices.
+    Impl::neighbours(*this, a, na);
+    Impl::neighbours(*this, b, nb);
+    common.clear();
+    std::set_intersection(na.begin(), na.end(), nb.begin(), nb.end(), std::back_inserter(common));
+    if (common.size() != 2) continue;
+    // Keep b; a disappears. A locked end stays where it is.
+    if (m_locked[a]) std::swap(a, b), std::swap(na, nb);
+    const Vec3 target = m_locked[b] ? m_vertices[b] : 0.5 * (m_vertices[a] + m_vertices[b]);
+    bool ok = true;
+    for (std::int32_t w : na)
+      if (w != b && (m_vertices[w] - target).squaredNorm() > max2) ok = false;
+    for (std::int32_t w : nb)
+      if (w != a && (m_vertices[w] - target).squaredNorm() > max2) ok = false;
+    if (!ok) continue;
+    // No surviving triangle may turn over or become needle-thin.
+    for (std::int32_t v : {a, b}) {
+      for (std::int32_t t : m_vertex_triangles[v]) {
+        if (t == ts[0] || t == ts[1]) continue;
+        const Tri& tr = m_triangles[t];
+        Vec3 p[3], q[3];
+        for (int k = 0; k < 3; ++k) {
+          p[k] = m_vertices[tr[k]];
+          q[k] = (tr[k] == a || tr[k] == b) ? target : p[k];
+        }
+        const Vec3 n0 = tri_normal(p[0], p[1], p[2]);
+        const Vec3 n1 = tri_normal(q[0], q[1], q[2]);
+        if (n0.dot(n1) <= 0.2 * n0.norm() * n1.norm() || n1.norm() < 1e-12) {
+          ok = false;
+          break;
+        }
+      }
+      if (!ok) break;
+    }
+    if (!ok) continue;
+    // Valence guard: the two opposite vertices lose one neighbour each; keep them ≥ 3.
+    std::vector<std::int32_t> nc;
+    bool small_valence = false;
+    for (std::int32_t c : common) {
+      Impl::neighbours(*this, c, nc);
+      if (nc.size() <= 3) small_valence = true;
+    }
+    if (small_valence) continue;
+    // Perform: delete the two triangles of the edge, move a's others onto b.
+    for (std::int32_t t : {ts[0], ts[1]}) {
+      m_triangle_alive[t] = 0;
+      for (std::int32_t v : m_triangles[t]) Impl::remove_incidence(*this, v, t);
+    }
+    const std::vector<std::int32_t> moved = m_vertex_triangles[a];
+    for (std::int32_t t : moved) Impl::replace_in_triangle(*this, t, a, b);
+    m_vertices[b] = target;
+    m_vertex_alive[a] = 0;
+    m_vertex_triangles[a].clear();
+    --m_alive_vertices;
+    ++count;
+    Impl::neighbours(*this, b, nb);
+    for (std::int32_t w : nb) {
+      const double e2 = (m_vertices[w] - m_vertices[b]).squaredNorm();
+      if (e2 < min2) queue.emplace(e2, edge_key(w, b));
+    }
+  }
+  return count;
+}
+
+std::int64_t SurfaceRemesher::flip_edges() {
+  std::int64_t count = 0;
+  std::vector<std::int32_t> nbuf;
+  auto valence = [&](std::int32_t v) { return static_cast<int>(m_vertex_triangles[v].size()); };
+  const std::size_t nt = m_triangles.size();
+  for (std::size_t t0 = 0; t0 < nt; ++t0) {
+    if (!m_triangle_alive[t0]) continue;
+    for (int k = 0; k < 3; ++k) {
+      const Tri tr = m_triangles[t0];
+      const std::int32_t a = tr[k], b = tr[(k + 1) % 3];
+      if (a > b) continue;
+      std::int32_t ts[2];
+      if (Impl::edge_triangles(*this, a, b, ts) != 2) continue;
+      std::int32_t t1 = ts[0], t2 = ts[1];
+      if (!Impl::runs(m_triangles[t1], a, b)) std::swap(t1, t2);
+      const std::int32_t c = Impl::opposite(m_triangles[t1], a, b);
+      const std::int32_t d = Impl::opposite(m_triangles[t2], a, b);
+      if (c == d) continue;
+      const int va = valence(a), vb = valence(b), vc = valence(c), vd = valence(d);
+      if (va <= 3 || vb <= 3) continue;
+      const int before = std::abs(va - 6) + std::abs(vb - 6) + std::abs(vc - 6) + std::abs(vd - 6);
+      const int after =
+          std::abs(va - 7) + std::abs(vb - 7) + std::abs(vc - 5) + std::abs(vd - 5);
+      if (after >= before) continue;
+      // The new edge c-d must not exist.
+      bool exists = false;
+      for (std::int32_t t : m_vertex_triangles[c]) {
+        const Tri& x = m_triangles[t];
+        if (x[0] == d || x[1] == d || x[2] == d) exists = true;
+      }
+      if (exists) continue;
+      // New triangles (a,d,c) and (d,b,c) must face the way the old pair faced.
+      const Vec3 &pa = m_vertices[a], &pb = m_vertices[b], &pc = m_vertices[c], &pd = m_vertices[d];
+      const Vec3 o1 = tri_normal(pa, pb, pc), o2 = tri_normal(pb, pa, pd);
+      const Vec3 n1 = tri_normal(pa, pd, pc), n2 = tri_normal(pd, pb, pc);
+      const double l1 = n1.norm(), l2 = n2.norm();
+      if (l1 < 1e-12 || l2 < 1e-12) continue;
+      // Reject folds: new normals must agree with each other and with the old ones.
+      if (n1.dot(n2) <= 0.5 * l1 * l2) continue;
+      const Vec3 old = o1.normalized() + o2.normalized();
+      if (n1.dot(old) <= 0.0 || n2.dot(old) <= 0.0) continue;
+      // Flip in place: t1 (a,b,c) → (a,d,c); t2 (b,a,d) → (d,b,c).
+      Impl::replace_in_triangle(*this, t1, b, d);  // (a,d,c)
+      Impl::replace_in_triangle(*this, t2, a, c);  // (b,c,d) ≡ (d,b,c)
+      ++count;
+    }
+  }
+  (void)nbuf;
+  return count;
+}
+
+void SurfaceRemesher::relax_tangentially(double weight) {
+  const std::size_t nv = m_vertices.size();
+  std::vector<Vec3> next = m_vertices;
+  std::vector<std::int32_t> nb;
+  for (std::size_t v = 0; v < nv; ++v) {
+    if (!m_vertex_alive[v] || m_locked[v] || m_vertex_triangles[v].empty()) continue;
+    Vec3 normal = Vec3::Zero();
+    for (std::int32_t t : m_vertex_triangles[v]) {
+      const Tri& tr = m_triangles[t];
+      normal += tri_normal(m_vertices[tr[0]], m_vertices[tr[1]], m_vertices[tr[2]]);
+    }
+    const double ln = normal.norm();
+    if (ln < 1e-300) continue;
+    normal /= ln;
+    Impl::neighbours(*this, static_cast<std::int32_t>(v), nb);
+    Vec3 centroid = Vec3::Zero();
+    for (std::int32_t w : nb) centroid += m_vertices[w];
+    centroid /= double(nb.size());
+    Vec3 step = centroid - m_vertices[v];
+    step -= normal * normal.dot(step);
+    next[v] = m_vertices[v] + weight * step;
+  }
+  m_vertices = std::move(next);
+}
+
+RemeshStats SurfaceRemesher::remesh(const RemeshOptions& options) {
+  if (!(options.target_edge_mm > 0.0) || !std::isfinite(options.target_edge_mm))
+    throw InvalidInput("remesh: target_edge_mm must be positive");
+  RemeshStats stats;
+  const double hi = options.split_ratio * options.target_edge_mm;
+  const double lo = options.collapse_ratio * options.target_edge_mm;
+  for (int it = 0; it < options.iterations; ++it) {
+    stats.splits += split_long_edges(hi);
+    stats.collapses += collapse_short_edges(lo, hi);
+    if (options.flip) stats.flips += flip_edges();
+    if (options.relax) relax_tangentially(options.relax_weight);
+  }
+  // Relaxation may stretch a few edges past the bound: a last split pass restores it.
+  if (options.relax && options.iterations > 0) stats.splits += split_long_edges(hi);
+  return stats;
+}
+
+geometry::TriangleMesh SurfaceRemesher::mesh() const {
+  geometry::TriangleMesh out;
+  std::vector<std::int32_t> remap(m_vertices.size(), -1);
+  for (std::size_t v = 0; v < m_vertices.size(); ++v) {
+    if (!m_vertex_alive[v] || m_vertex_triangles[v].empty()) continue;
+    remap[v] = static_cast<std::int32_t>(out.vertices.size());
+    out.vertices.push_back(m_vertices[v]);
+  }
+  for (std::size_t t = 0; t < m_triangles.size(); ++t) {
+    if (!m_triangle_alive[t]) continue;
+    const Tri& tr = m_triangles[t];
+    out.triangles.push_back(Tri{remap[tr[0]], remap[tr[1]], remap[tr[2]]});
+  }
+  return out;
+}
+
+std::vector<std::uint8_t> SurfaceRemesher::locked() const {
+  std::vector<std::uint8_t> out;
+  for (std::size_t v = 0; v < m_vertices.size(); ++v)
+    if (m_vertex_alive[v] && !m_vertex_triangles[v].empty()) out.push_back(m_locked[v]);
+  return out;
+}
+
+geometry::TriangleMesh remesh(const geometry::TriangleMesh& mesh, const RemeshOptions& options) {
+  SurfaceRemesher r(mesh);
+  r.remesh(options);
+  return r.mesh();
+}
+
+}  // namespace ido::meshing

@@ -1,0 +1,356 @@
+// SPDX-License-Identifier: Apache-2.0
+// The balloon segmentation loop (Turini, Pietroni, Ganovelli & Scopigno, "Techniques for
+// computer assisted surgery", Eurographics Italian Chapter 2007). Written by hand for ido.
+#include "ido/segment/balloon.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <string>
+
+#include "ido/core/error.h"
+#include "ido/core/log.h"
+#include "ido/core/parallel.h"
+#include "ido/image/filters.h"
+#include "ido/meshing/remesh.h"
+#include "ido/meshing/signed_distance.h"
+#include "ido/segment/topology_repair.h"
+
+namespace ido::segment {
+
+geometry::TriangleMesh balloon_icosphere(const Vec3& centre, double radius, int subdivisions) {
+  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+  std::vector<Vec3> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+                         {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  std::vector<Tri> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
+                        {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
+                        {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
+                        {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
+  for (auto& p : v) p.normalize();
+  for (int s = 0; s < subdivisions; ++s) {
+    std::map<std::pair<int, int>, int> mid;
+    auto midpoint = [&](int a, int b) {
+      const auto key = std::minmax(a, b);
+      auto it = mid.find(key);
+      if (it != mid.end()) return it->second;
+      v.push_back((v[a] + v[b]).normalized());
+      const int id = int(v.size()) - 1;
+      mid.emplace(key, id);
+      return id;
+    };
+    std::vector<Tri> g;
+    for (const Tri& tr : f) {
+      const int a = midpoint(tr[0], tr[1]), b = midpoint(tr[1], tr[2]), c = midpoint(tr[2], tr[0]);
+      g.push_back({tr[0], a, c});
+      g.push_back({tr[1], b, a});
+      g.push_back({tr[2], c, b});
+      g.push_back({a, b, c});
+    }
+    f = std::move(g);
+  }
+  geometry::TriangleMesh m;
+  for (const auto& p : v) m.vertices.push_back(centre + radius * p);
+  m.triangles = std::move(f);
+  return m;
+}
+
+image::Volume<std::uint8_t> surface_to_mask(const geometry::TriangleMesh& surface, const image::Volume<float>& grid,
+                                            bool threaded) {
+  if (grid.empty()) throw InvalidInput("surface to mask: the grid is empty");
+  image::Volume<std::uint8_t> mask = grid.like<std::uint8_t>(0);
+  if (surface.triangles.empty()) return mask;
+  Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
+  for (const Vec3& v : surface.vertices) {
+    const Vec3 idx = grid.world_to_index(v);
+    lo = lo.cwiseMin(idx);
+    hi = hi.cwiseMax(idx);
+  }
+  Index3 l, size;
+  for (int a = 0; a < 3; ++a) {
+    l[a] = std::clamp<std::int64_t>(std::int64_t(std::floor(lo[a])) - 2, 0, grid.size(a) - 1);
+    const std::int64_t h = std::clamp<std::int64_t>(std::int64_t(std::ceil(hi[a])) + 2, 0, grid.size(a) - 1);
+    size[a] = std::max<std::int64_t>(h - l[a] + 1, 1);
+  }
+  const image::Volume<float> sub(size, grid.spacing(), grid.index_to_world(Vec3(double(l[0]), double(l[1]), double(l[2]))),
+                                 grid.direction());
+  meshing::SignedDistanceOptions sd;
+  sd.threaded = threaded;
+  const image::Volume<float> field = meshing::signed_distance(surface, sub, sd);
+  for (std::int64_t k = 0; k < size[2]; ++k)
+    for (std::int64_t j = 0; j < size[1]; ++j)
+      for (std::int64_t i = 0; i < size[0]; ++i)
+        if (field(i, j, k) < 0.0f) mask(i + l[0], j + l[1], k + l[2]) = 1;
+  return mask;
+}
+
+struct Balloon::State {
+  BalloonOptions opt;
+  image::Volume<float> smoothed;
+  IntensityModel model;
+  double h = 1.0;  // smallest spacing (mm)
+  sim::Particles particles;
+  std::vector<Tri> triangles;
+  std::int64_t iteration = 0;
+  double last_window_volume = 0;
+  bool done = false;
+  BalloonReport report;
+  std::chrono::steady_clock::time_point start;
+  std::int64_t frozen_pending = 0;
+
+  geometry::TriangleMesh mesh() const {
+    geometry::TriangleMesh m;
+    m.vertices = particles.positions();
+    m.triangles = triangles;
+    return m;
+  }
+  void set_mesh(const geometry::TriangleMesh& m, const std::vector<std::uint8_t>& locked) {
+    sim::Particles p;
+    for (std::size_t i = 0; i < m.vertices.size(); ++i) {
+      p.add(m.vertices[i], 1.0);
+      if (!locked.empty() && locked[i]) p.set_fixed(i, true);
+    }
+    particles = std::move(p);
+    triangles = m.triangles;
+  }
+  double volume() const {
+    double v = 0;
+    const auto& x = particles.positions();
+    for (const Tri& t : triangles) v += x[t[0]].dot(x[t[1]].cross(x[t[2]])) / 6.0;
+    return v;
+  }
+  bool inside_roi(const Vec3& p) const {
+    if (opt.roi_mm && ((p.array() < (*opt.roi_mm)[0].array()).any() || (p.array() > (*opt.roi_mm)[1].array()).any()))
+      return false;
+    const Vec3 idx = smoothed.world_to_index(p);
+    for (int a = 0; a < 3; ++a)
+      if (!(idx[a] >= 0.0 && idx[a] <= double(smoothed.size(a) - 1))) return false;
+    return true;
+  }
+  void remesh() {
+    meshing::SurfaceRemesher r(mesh(), locked_flags());
+    const double target = opt.edge_length_voxels * h;
+    r.split_long_edges(4.0 / 3.0 * target);
+    r.collapse_short_edges(0.8 * target * 0.75, 4.0 / 3.0 * target);
+    r.flip_edges();
+    set_mesh(r.mesh(), r.locked());
+  }
+  std::vector<std::uint8_t> locked_flags() const {
+    std::vector<std::uint8_t> l(particles.size());
+    for (std::size_t i = 0; i < l.size(); ++i) l[i] = particles.fixed(i) ? 1 : 0;
+    return l;
+  }
+  void repair(const std::vector<std::pair<std::int32_t, std::int32_t>>& pairs, bool do_remesh) {
+    TopologyRepairOptions ro;
+    ro.grid_spacing_mm = h;
+    ro.target_edge_mm = opt.edge_length_voxels * h;
+    ro.min_component_volume_mm3 = 2.0 * h * h * h;
+    ro.remesh = do_remesh;
+    ro.threaded = opt.threaded;
+    const geometry::TriangleMesh repaired = repair_topology(mesh(), pairs, ro);
+    if (repaired.triangles.empty()) return;  // keep the old surface rather than lose it
+    set_mesh(repaired, {});
+    ++report.repairs;
+  }
+  // Handles intersections: freeze the vertices involved, then rebuild the surface.
+  void handle_intersections() {
+    const auto pairs = find_self_intersections(mesh(), opt.threaded);
+    if (pairs.empty()) return;
+    for (const auto& [a, b] : pairs)
+      for (std::int32_t t : {a, b})
+        for (std::int32_t v : triangles[t])
+          if (!particles.fixed(v)) {
+            particles.set_fixed(v, true);
+            ++report.frozen_vertices;
+          }
+    repair(pairs, true);
+  }
+  // One explicit step of the first-order dynamics. edge_stage switches the intensity
+  // inflation for the edge attraction where a wall is within reach.
+  void move(bool edge_stage) {
+    const auto d = surface_differentials(particles.positions(), triangles);
+    auto& x = particles.positions();
+    auto& v = particles.velocities();
+    const std::size_t n = x.size();
+    const double step = opt.step_voxels * h;
+    const double search = opt.edge_search_voxels * h;
+    const double min_rise = 0.25 * model.tolerance / h;
+    const double sigma2 = std::pow(opt.smoothing_sigma_voxels * h, 2);
+    std::vector<Vec3> next(n);
+    parallel_for(
+        n,
+        [&](std::size_t i) {
+          if (particles.fixed(i)) {
+            next[i] = x[i];
+            return;
+          }
+          const Vec3& nrm = d.normals[i];
+          const double H = umbrella_mean_curvature(d.umbrella_mm[i], nrm, d.mean_edge2_mm2[i]);
+          double normal_mm = 0;
+          const bool in_roi = inside_roi(x[i]);
+          const double I = smoothed.sample(x[i]);
+          if (!in_roi) {
+            normal_mm = -step;
+          } else if (edge_stage) {
+            const auto t = edge_offset_along_normal(smoothed, x[i], nrm, model, search, 0.1 * h, min_rise, h);
+            // Our own Gaussian pre-smoothing moves the half-way level of a curved wall
+            // inwards by about σ² H (σ the smoothing, H the mean curvature): add it back.
+            const double blur_shift = sigma2 * std::clamp(H, -1.0 / h, 1.0 / h);
+            normal_mm = t ? std::clamp(0.5 * (*t + blur_shift), -step, step)
+                          : step * opt.weights.inflation * inflation_speed(I, model);
+          } else {
+            normal_mm = step * opt.weights.inflation * inflation_speed(I, model);
+          }
+          // Curvature stiffness as an umbrella step along the normal, coefficient capped
+          // for explicit stability (the umbrella step is stable for coefficients ≤ 1).
+          const double weight_c = edge_stage ? 0.1 * opt.weights.curvature : opt.weights.curvature;
+          double c = 2.0 * opt.step_voxels * weight_c * h * h / std::max(d.mean_edge2_mm2[i], 1e-12);
+          c = std::min(c, 0.5);
+          Vec3 delta = nrm * normal_mm + c * nrm * nrm.dot(d.umbrella_mm[i]) +
+                       opt.tangential_weight * tangential_umbrella(d.umbrella_mm[i], nrm);
+          const double len = delta.norm();
+          if (len > step) delta *= step / len;
+          next[i] = x[i] + delta;
+          v[i] = delta;
+        },
+        opt.threaded, 512);
+    x = std::move(next);
+  }
+};
+
+Balloon::Balloon(const image::Volume<float>& ct, const std::vector<Vec3>& seeds_mm, const BalloonOptions& options)
+    : m(std::make_unique<State>()) {
+  m->start = std::chrono::steady_clock::now();
+  if (ct.empty()) throw InvalidInput("balloon: the volume is empty");
+  if (seeds_mm.empty()) throw InvalidInput("balloon: at least one seed is needed");
+  if (options.tolerance && !(*options.tolerance > 0))
+    throw InvalidInput("balloon: the tolerance must be positive");
+  if (!(options.step_voxels > 0 && options.step_voxels <= 1.0))
+    throw InvalidInput("balloon: step_voxels must be in (0, 1]");
+  if (!(options.edge_length_voxels > 0) || !(options.seed_radius_voxels > 0))
+    throw InvalidInput("balloon: edge length and seed radius must be positive");
+  if (options.roi_mm && ((*options.roi_mm)[0].array() >= (*options.roi_mm)[1].array()).any())
+    throw InvalidInput("balloon: the region of interest must have min < max on every axis");
+  m->opt = options;
+  m->h = ct.spacing().minCoeff();
+  image::GaussianOptions go;
+  m->smoothed = image::gaussian_smooth(ct, options.smoothing_sigma_voxels * m->h, go);
+  for (const Vec3& s : seeds_mm) {
+    const Vec3 idx = ct.world_to_index(s);
+    for (int a = 0; a < 3; ++a)
+      if (!(idx[a] >= -0.5 && idx[a] <= double(ct.size(a)) - 0.5))
+        throw InvalidInput("balloon: seed (" + std::to_string(s[0]) + ", " + std::to_string(s[1]) + ", " +
+                           std::to_string(s[2]) + ") mm lies outside the volume");
+    if (options.roi_mm && !m->inside_roi(s)) throw InvalidInput("balloon: a seed lies outside the region of interest");
+  }
+  IntensityModel est;
+  if (!options.reference || !options.tolerance) est = estimate_intensity_model(ct, seeds_mm, options.estimate);
+  m->model.reference = options.reference ? *options.reference : est.reference;
+  m->model.tolerance = options.tolerance ? *options.tolerance : est.tolerance;
+  m->report.model = m->model;
+  geometry::TriangleMesh all;
+  const double r0 = options.seed_radius_voxels * ct.spacing().mean();
+  for (const Vec3& s : seeds_mm) {
+    const auto ico = balloon_icosphere(s, r0, 2);
+    const auto base = static_cast<std::int32_t>(all.vertices.size());
+    all.vertices.insert(all.vertices.end(), ico.vertices.begin(), ico.vertices.end());
+    for (const Tri& t : ico.triangles) all.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+  }
+  m->set_mesh(all, {});
+  if (seeds_mm.size() > 1) m->handle_intersections();
+  m->last_window_volume = m->volume();
+}
+
+Balloon::Balloon(Balloon&&) noexcept = default;
+Balloon& Balloon::operator=(Balloon&&) noexcept = default;
+Balloon::~Balloon() = default;
+
+const sim::Particles& Balloon::particles() const { return m->particles; }
+const IntensityModel& Balloon::model() const { return m->model; }
+geometry::TriangleMesh Balloon::surface() const { return m->mesh(); }
+
+bool Balloon::step() {
+  if (m->done) return true;
+  State& s = *m;
+  s.move(false);
+  ++s.iteration;
+  if (s.iteration % s.opt.remesh_interval == 0) s.remesh();
+  if (s.iteration % s.opt.intersection_interval == 0) {
+    s.handle_intersections();
+    // Frozen vertices thaw once the repair rebuilt the surface; unfreeze any left.
+  }
+  const double vol = s.volume();
+  if (vol > s.opt.max_volume_mm3) {
+    s.done = true;
+    s.report.leak_warning = true;
+    s.report.stop_reason = "max_volume";
+  } else if (s.iteration >= s.opt.max_iterations) {
+    s.done = true;
+    s.report.stop_reason = "max_iterations";
+    s.report.leak_warning = vol > s.last_window_volume * (1 + s.opt.convergence_rel_volume);
+  } else if (s.iteration % s.opt.convergence_window == 0) {
+    if (std::abs(vol - s.last_window_volume) <= s.opt.convergence_rel_volume * std::abs(vol)) {
+      s.done = true;
+      s.report.converged = true;
+      s.report.stop_reason = "converged";
+    }
+    s.last_window_volume = vol;
+  }
+  return s.done;
+}
+
+BalloonResult Balloon::run(Progress* progress) {
+  State& s = *m;
+  while (!step()) {
+    if (s.iteration % 50 == 0) report(progress, std::min(0.9, double(s.iteration) / s.opt.max_iterations), "inflating");
+  }
+  // Thaw frozen vertices for the edge stage.
+  for (std::size_t i = 0; i < s.particles.size(); ++i) s.particles.set_fixed(i, false);
+  if (s.opt.edge_refinement) {
+    report(progress, 0.9, "snapping to edges");
+    for (int it = 0; it < s.opt.edge_iterations; ++it) {
+      s.move(true);
+      ++s.iteration;
+      if ((it + 1) % s.opt.remesh_interval == 0) s.remesh();
+    }
+  }
+  // Final guarantee: no self-intersection. A repair without remeshing gives the zero level
+  // of a signed distance, which cannot intersect itself.
+  auto pairs = find_self_intersections(s.mesh(), s.opt.threaded);
+  if (!pairs.empty()) {
+    s.repair(pairs, true);
+    pairs = find_self_intersections(s.mesh(), s.opt.threaded);
+    if (!pairs.empty()) {
+      s.repair(pairs, false);
+      pairs = find_self_intersections(s.mesh(), s.opt.threaded);
+    }
+  }
+  BalloonResult out;
+  out.surface = s.mesh();
+  const SurfaceCheck c = check_surface(out.surface);
+  BalloonReport& r = s.report;
+  r.iterations = s.iteration;
+  r.volume_mm3 = c.volume_mm3;
+  r.area_mm2 = c.area_mm2;
+  r.vertices = c.vertices;
+  r.edges = c.edges;
+  r.triangles = c.triangles;
+  r.euler_characteristic = c.euler_characteristic;
+  r.components = c.components;
+  r.closed = c.closed;
+  r.manifold = c.edge_manifold && c.vertex_manifold;
+  r.oriented = c.oriented;
+  r.self_intersections = static_cast<std::int64_t>(pairs.size());
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - s.start).count();
+  out.report = r;
+  report(progress, 1.0, "done");
+  return out;
+}
+
+BalloonResult segment_balloon(const image::Volume<float>& ct, const std::vector<Vec3>& seeds_mm,
+                              const BalloonOptions& options, Progress* progress) {
+  Balloon b(ct, seeds_mm, options);
+  return b.run(progress);
+}
+
+}  // namespace ido::segment

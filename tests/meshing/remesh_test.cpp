@@ -1,0 +1,207 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "ido/meshing/remesh.h"
+
+#include <cmath>
+#include <map>
+#include <set>
+
+#include <gtest/gtest.h>
+
+#include "ido/core/error.h"
+#include "support/test_support.h"
+
+namespace ido::meshing {
+namespace {
+
+// Subdivided octahedron projected onto a sphere (test-local, independent of the library).
+geometry::TriangleMesh sphere(double r, int subdivisions) {
+  geometry::TriangleMesh m;
+  m.vertices = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  m.triangles = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4}, {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
+  for (int s = 0; s < subdivisions; ++s) {
+    std::map<std::pair<int, int>, int> mid;
+    auto midpoint = [&](int a, int b) {
+      auto key = std::minmax(a, b);
+      auto it = mid.find(key);
+      if (it != mid.end()) return it->second;
+      m.vertices.push_back((m.vertices[a] + m.vertices[b]).normalized());
+      return mid[key] = int(m.vertices.size()) - 1;
+    };
+    std::vector<Tri> g;
+    for (const Tri& t : m.triangles) {
+      int a = midpoint(t[0], t[1]), b = midpoint(t[1], t[2]), c = midpoint(t[2], t[0]);
+      g.push_back({t[0], a, c});
+      g.push_back({t[1], b, a});
+      g.push_back({t[2], c, b});
+      g.push_back({a, b, c});
+    }
+    m.triangles = g;
+  }
+  for (auto& v : m.vertices) v = v.normalized() * r;
+  return m;
+}
+
+// Torus of radii R, r sampled on an nu × nv grid (genus 1, outward).
+geometry::TriangleMesh torus(double R, double r, int nu, int nv) {
+  geometry::TriangleMesh m;
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      const double u = 2 * kPi * i / nu, v = 2 * kPi * j / nv;
+      m.vertices.push_back({(R + r * std::cos(v)) * std::cos(u), (R + r * std::cos(v)) * std::sin(u), r * std::sin(v)});
+    }
+  auto id = [&](int i, int j) { return ((i + nu) % nu) * nv + (j + nv) % nv; };
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      m.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      m.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  return m;
+}
+
+struct Facts {
+  bool closed_oriented = true;
+  bool vertex_manifold = true;
+  long euler = 0;
+  double volume = 0;
+  double min_edge = INFINITY, max_edge = 0;
+};
+
+// Test-local checker: every directed edge once with its reverse present; each vertex's
+// fan is one cycle; Euler characteristic over used vertices.
+Facts facts(const geometry::TriangleMesh& m) {
+  Facts f;
+  std::map<std::pair<int, int>, int> directed;
+  std::vector<std::map<int, int>> fan(m.vertices.size());
+  std::set<int> used;
+  for (const Tri& t : m.triangles) {
+    for (int k = 0; k < 3; ++k) {
+      const int a = t[k], b = t[(k + 1) % 3], c = t[(k + 2) % 3];
+      directed[{a, b}]++;
+      if (fan[a].count(b)) f.vertex_manifold = false;
+      fan[a][b] = c;
+      used.insert(a);
+      const double l = (m.vertices[a] - m.vertices[b]).norm();
+      f.min_edge = std::min(f.min_edge, l);
+      f.max_edge = std::max(f.max_edge, l);
+    }
+    f.volume += m.vertices[t[0]].dot(m.vertices[t[1]].cross(m.vertices[t[2]])) / 6.0;
+  }
+  for (const auto& [e, n] : directed)
+    if (n != 1 || !directed.count({e.second, e.first})) f.closed_oriented = false;
+  for (int v : used) {
+    const auto& fv = fan[v];
+    int cur = fv.begin()->first, steps = 0;
+    do {
+      auto it = fv.find(cur);
+      if (it == fv.end()) break;
+      cur = it->second;
+      ++steps;
+    } while (cur != fv.begin()->first && steps <= int(fv.size()));
+    if (steps != int(fv.size())) f.vertex_manifold = false;
+  }
+  f.euler = long(used.size()) - long(directed.size() / 2) + long(m.triangles.size());
+  return f;
+}
+
+TEST(SurfaceRemesher, SplitBoundsEveryEdgeAndKeepsManifold) {
+  const auto m = sphere(10.0, 1);  // edges ≈ 7 mm
+  SurfaceRemesher r(m);
+  const auto n = r.split_long_edges(1.5);
+  EXPECT_GT(n, 100);
+  const auto out = r.mesh();
+  const Facts f = facts(out);
+  EXPECT_TRUE(f.closed_oriented);
+  EXPECT_TRUE(f.vertex_manifold);
+  EXPECT_EQ(f.euler, 2);
+  EXPECT_LE(f.max_edge, 1.5);
+  // Midpoint splits do not change the enclosed polyhedron.
+  EXPECT_TRUE(test::rel_near(f.volume, facts(m).volume, 1e-9));
+}
+
+TEST(SurfaceRemesher, CollapseRemovesShortEdgesKeepsTopology) {
+  const auto m = sphere(10.0, 5);  // edges ≈ 0.25–0.4 mm
+  SurfaceRemesher r(m);
+  const auto n = r.collapse_short_edges(1.0, 2.0);
+  EXPECT_GT(n, 1000);
+  const auto out = r.mesh();
+  const Facts f = facts(out);
+  EXPECT_TRUE(f.closed_oriented);
+  EXPECT_TRUE(f.vertex_manifold);
+  EXPECT_EQ(f.euler, 2);
+  EXPECT_LE(f.max_edge, 2.0 + 1e-9);
+  EXPECT_LT(out.vertices.size(), m.vertices.size() / 4);
+  EXPECT_TRUE(test::rel_near(f.volume, 4.0 / 3.0 * kPi * 1000.0, 0.05));
+}
+
+TEST(SurfaceRemesher, FullRemeshOfTorusKeepsGenusAndVolume) {
+  const double R = 10, rr = 3;
+  const auto m = torus(R, rr, 24, 10);
+  const auto out = remesh(m, {.target_edge_mm = 0.8, .iterations = 4});
+  const Facts f = facts(out);
+  EXPECT_TRUE(f.closed_oriented);
+  EXPECT_TRUE(f.vertex_manifold);
+  EXPECT_EQ(f.euler, 0);
+  EXPECT_GT(f.min_edge, 0.8 * 0.8 * 0.5);
+  EXPECT_LT(f.max_edge, 0.8 * 4.0 / 3.0 + 1e-9);
+  // Refined and relaxed: volume within 3 % of the coarse input polyhedron's.
+  EXPECT_TRUE(test::rel_near(f.volume, facts(m).volume, 0.03));
+}
+
+TEST(SurfaceRemesher, FlipsEvenValences) {
+  // Splitting only creates valence-4 vertices; flips must bring the mean deviation from 6 down.
+  auto deviation = [](const geometry::TriangleMesh& m) {
+    std::vector<int> val(m.vertices.size(), 0);
+    for (const Tri& t : m.triangles)
+      for (int v : t) val[v]++;
+    double s = 0;
+    for (int x : val) s += std::abs(x - 6);
+    return s / double(val.size());
+  };
+  SurfaceRemesher r(sphere(10.0, 1));
+  r.split_long_edges(2.0);
+  const double before = deviation(r.mesh());
+  EXPECT_GT(r.flip_edges(), 0);
+  const auto out = r.mesh();
+  EXPECT_LT(deviation(out), before);
+  const Facts f = facts(out);
+  EXPECT_TRUE(f.closed_oriented);
+  EXPECT_TRUE(f.vertex_manifold);
+  EXPECT_EQ(f.euler, 2);
+}
+
+TEST(SurfaceRemesher, LockedVerticesStayPut) {
+  const auto m = sphere(10.0, 4);
+  std::vector<std::uint8_t> locked(m.vertices.size(), 0);
+  for (std::size_t i = 0; i < m.vertices.size(); ++i) locked[i] = m.vertices[i].z() > 5.0;
+  SurfaceRemesher r(m, locked);
+  r.remesh({.target_edge_mm = 1.5, .iterations = 3});
+  const auto out = r.mesh();
+  const auto lk = r.locked();
+  ASSERT_EQ(lk.size(), out.vertices.size());
+  // Every original locked vertex survives at its place.
+  std::size_t found = 0, expected = 0;
+  for (std::size_t i = 0; i < m.vertices.size(); ++i) {
+    if (!locked[i]) continue;
+    ++expected;
+    for (std::size_t j = 0; j < out.vertices.size(); ++j)
+      if (lk[j] && (out.vertices[j] - m.vertices[i]).norm() < 1e-12) {
+        ++found;
+        break;
+      }
+  }
+  EXPECT_EQ(found, expected);
+  EXPECT_TRUE(facts(out).closed_oriented);
+}
+
+TEST(SurfaceRemesher, RejectsOpenMesh) {
+  auto m = sphere(1.0, 1);
+  m.triangles.pop_back();
+  EXPECT_THROW(SurfaceRemesher{m}, InvalidInput);
+  auto bad = sphere(1.0, 0);
+  bad.triangles[0][0] = 99;
+  EXPECT_THROW(SurfaceRemesher{bad}, InvalidInput);
+  EXPECT_THROW((SurfaceRemesher{sphere(1.0, 0), std::vector<std::uint8_t>(2, 0)}), InvalidInput);
+}
+
+}  // namespace
+}  // namespace ido::meshing

@@ -1,0 +1,112 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "ido/meshing/signed_distance.h"
+
+#include <cmath>
+#include <map>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "ido/core/error.h"
+#include "support/test_support.h"
+
+namespace ido::meshing {
+namespace {
+
+geometry::TriangleMesh sphere(const Vec3& c, double r, int subdivisions) {
+  geometry::TriangleMesh m;
+  m.vertices = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  m.triangles = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4}, {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
+  for (int s = 0; s < subdivisions; ++s) {
+    std::map<std::pair<int, int>, int> mid;
+    auto midpoint = [&](int a, int b) {
+      auto key = std::minmax(a, b);
+      auto it = mid.find(key);
+      if (it != mid.end()) return it->second;
+      m.vertices.push_back((m.vertices[a] + m.vertices[b]).normalized());
+      return mid[key] = int(m.vertices.size()) - 1;
+    };
+    std::vector<Tri> g;
+    for (const Tri& t : m.triangles) {
+      int a = midpoint(t[0], t[1]), b = midpoint(t[1], t[2]), cc = midpoint(t[2], t[0]);
+      g.push_back({t[0], a, cc});
+      g.push_back({t[1], b, a});
+      g.push_back({t[2], cc, b});
+      g.push_back({a, b, cc});
+    }
+    m.triangles = g;
+  }
+  for (auto& v : m.vertices) v = c + v.normalized() * r;
+  return m;
+}
+
+TEST(ClosestPointOnTriangle, MatchesDenseSampling) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-2, 2);
+  for (int trial = 0; trial < 50; ++trial) {
+    const Vec3 a(u(rng), u(rng), u(rng)), b(u(rng), u(rng), u(rng)), c(u(rng), u(rng), u(rng));
+    const Vec3 p(u(rng), u(rng), u(rng));
+    const double d = (closest_point_on_triangle_mm(p, a, b, c) - p).norm();
+    double best = INFINITY;
+    const int n = 200;
+    for (int i = 0; i <= n; ++i)
+      for (int j = 0; i + j <= n; ++j) {
+        const Vec3 q = a + (b - a) * (double(i) / n) + (c - a) * (double(j) / n);
+        best = std::min(best, (q - p).norm());
+      }
+    EXPECT_LE(d, best + 1e-12);
+    EXPECT_GE(d, best - 0.02 * (b - a).norm() - 0.02 * (c - a).norm());
+  }
+}
+
+TEST(FastWindingNumber, InsideOneOutsideZeroOverlapTwo) {
+  geometry::TriangleMesh m = sphere(Vec3::Zero(), 5.0, 4);
+  const auto second = sphere(Vec3(4, 0, 0), 5.0, 4);
+  const auto base = static_cast<std::int32_t>(m.vertices.size());
+  m.vertices.insert(m.vertices.end(), second.vertices.begin(), second.vertices.end());
+  for (const Tri& t : second.triangles) m.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+  const FastWindingNumber w(m);
+  EXPECT_TRUE(test::near(w.at(Vec3(-3, 0, 0)), 1.0, 0.02));
+  EXPECT_TRUE(test::near(w.at(Vec3(2, 0, 0)), 2.0, 0.02));
+  EXPECT_TRUE(test::near(w.at(Vec3(7, 1, 0)), 1.0, 0.02));
+  EXPECT_TRUE(test::near(w.at(Vec3(0, 9, 0)), 0.0, 0.02));
+  EXPECT_TRUE(test::near(w.at(Vec3(40, 0, 3)), 0.0, 0.01));
+}
+
+TEST(SignedDistance, SphereMatchesAnalyticDistanceAndSign) {
+  const Vec3 c(1.3, -0.7, 0.4);
+  const double r = 6.0;
+  const auto m = sphere(c, r, 5);  // chord error r(1 − cos θ) ≈ 0.01 mm
+  const image::Volume<float> grid({24, 22, 20}, Vec3(0.8, 0.9, 1.0), Vec3(-9, -10, -9));
+  SignedDistanceOptions so;
+  so.band_mm = 2.0;
+  const auto sdf = signed_distance(m, grid, so);
+  int band = 0;
+  for (std::int64_t k = 0; k < 20; ++k)
+    for (std::int64_t j = 0; j < 22; ++j)
+      for (std::int64_t i = 0; i < 24; ++i) {
+        const Vec3 p = grid.index_to_world(Vec3(double(i), double(j), double(k)));
+        const double exact = (p - c).norm() - r;
+        const double v = sdf(i, j, k);
+        if (std::abs(exact) < 1.9) {
+          ++band;
+          ASSERT_TRUE(test::near(v, exact, 0.03)) << i << " " << j << " " << k;
+        } else {
+          ASSERT_EQ(v < 0, exact < 0) << i << " " << j << " " << k;
+          ASSERT_GE(std::abs(v), 1.9 - 0.03);  // exact up to the band, ±band beyond
+        }
+      }
+  EXPECT_GT(band, 1000);
+}
+
+TEST(SignedDistance, RejectsBadInput) {
+  const image::Volume<float> grid({4, 4, 4});
+  EXPECT_THROW((void)signed_distance(geometry::TriangleMesh{}, grid), InvalidInput);
+  EXPECT_THROW((void)signed_distance(sphere(Vec3::Zero(), 1, 0), image::Volume<float>{}), InvalidInput);
+  SignedDistanceOptions o;
+  o.distance_triangles = {1, 0};
+  EXPECT_THROW((void)signed_distance(sphere(Vec3::Zero(), 1, 0), grid, o), InvalidInput);
+}
+
+}  // namespace
+}  // namespace ido::meshing

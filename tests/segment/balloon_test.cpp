@@ -1,0 +1,173 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "ido/segment/balloon.h"
+
+#include <cmath>
+#include <functional>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "ido/core/error.h"
+#include "ido/segment/balloon_forces.h"
+#include "ido/segment/intensity_model.h"
+#include "ido/segment/topology_repair.h"
+#include "support/test_support.h"
+
+namespace ido::segment {
+namespace {
+
+// A CT-like test volume: `inside(p)` voxels at `hu_in`, others at 0, with Gaussian noise,
+// and the truth mask. Partial volume by 4×4×4 supersampling.
+struct Synthetic {
+  image::Volume<float> ct;
+  image::Volume<std::uint8_t> truth;
+};
+Synthetic make_volume(Index3 size, const Vec3& spacing, const std::function<bool(const Vec3&)>& inside,
+                      double hu_in, double noise, unsigned seed = 7) {
+  Synthetic s{image::Volume<float>(size, spacing), image::Volume<std::uint8_t>(size, spacing)};
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(0.0, noise);
+  for (std::int64_t k = 0; k < size[2]; ++k)
+    for (std::int64_t j = 0; j < size[1]; ++j)
+      for (std::int64_t i = 0; i < size[0]; ++i) {
+        int hits = 0;
+        for (int a = 0; a < 4; ++a)
+          for (int b = 0; b < 4; ++b)
+            for (int c = 0; c < 4; ++c)
+              hits += inside(s.ct.index_to_world(Vec3(i - 0.375 + 0.25 * a, j - 0.375 + 0.25 * b, k - 0.375 + 0.25 * c)));
+        s.ct(i, j, k) = static_cast<float>(hu_in * hits / 64.0 + (noise > 0 ? g(rng) : 0.0));
+        s.truth(i, j, k) = inside(s.ct.index_to_world(Vec3(double(i), double(j), double(k))));
+      }
+  return s;
+}
+
+double dice(const image::Volume<std::uint8_t>& a, const image::Volume<std::uint8_t>& b) {
+  double inter = 0, na = 0, nb = 0;
+  for (std::size_t i = 0; i < a.data().size(); ++i) {
+    inter += a.data()[i] && b.data()[i];
+    na += a.data()[i] != 0;
+    nb += b.data()[i] != 0;
+  }
+  return 2 * inter / (na + nb);
+}
+
+TEST(InflationSpeed, InflatesInsideBandDeflatesBeyond) {
+  const IntensityModel m{200, 50};
+  EXPECT_DOUBLE_EQ(inflation_speed(200, m), 1.0);
+  EXPECT_DOUBLE_EQ(inflation_speed(225, m), 0.5);
+  EXPECT_DOUBLE_EQ(inflation_speed(175, m), 0.5);
+  EXPECT_DOUBLE_EQ(inflation_speed(250, m), 0.0);
+  EXPECT_LT(inflation_speed(100, m), 0.0);
+  EXPECT_LT(inflation_speed(320, m), 0.0);
+  EXPECT_DOUBLE_EQ(inflation_speed(-1000, m), -1.0);
+}
+
+TEST(SurfaceDifferentials, UmbrellaCurvatureOfSphere) {
+  const double r = 7.0;
+  const auto m = balloon_icosphere(Vec3(1, 2, 3), r, 4);
+  const auto d = surface_differentials(m.vertices, m.triangles);
+  for (std::size_t i = 0; i < m.vertices.size(); ++i) {
+    const Vec3 radial = (m.vertices[i] - Vec3(1, 2, 3)).normalized();
+    ASSERT_GT(d.normals[i].dot(radial), 0.999);
+    ASSERT_TRUE(test::rel_near(umbrella_mean_curvature(d.umbrella_mm[i], d.normals[i], d.mean_edge2_mm2[i]), 1.0 / r, 0.1));
+    ASSERT_LT(tangential_umbrella(d.umbrella_mm[i], d.normals[i]).norm(), 0.2 * std::sqrt(d.mean_edge2_mm2[i]));
+  }
+}
+
+TEST(EdgeOffset, FindsBlurredStepHalfway) {
+  // Bright half-space x < 10.3 mm blurred by a Gaussian of σ = 1 mm: the wall (steepest
+  // point of the erfc profile) is at 10.3.
+  image::Volume<float> v({30, 4, 4}, Vec3(1, 1, 1));
+  for (std::int64_t i = 0; i < 30; ++i)
+    for (std::int64_t j = 0; j < 4; ++j)
+      for (std::int64_t k = 0; k < 4; ++k) v(i, j, k) = float(150.0 * std::erfc((double(i) - 10.3) / std::sqrt(2.0)));
+  const IntensityModel m{300, 100};
+  for (double x0 : {9.2, 10.0, 11.1}) {
+    const auto t = edge_offset_along_normal(v, Vec3(x0, 1.5, 1.5), Vec3::UnitX(), m, 1.5, 0.05, 10.0, 1.0);
+    ASSERT_TRUE(t.has_value());
+    // Trilinear interpolation of the sampled profile: the steepest point is within a few
+    // hundredths of a voxel.
+    EXPECT_TRUE(test::near(x0 + *t, 10.3, 0.08)) << x0;
+  }
+  // Flat region: no wall within reach.
+  EXPECT_FALSE(edge_offset_along_normal(v, Vec3(3, 1.5, 1.5), Vec3::UnitX(), m, 1.5, 0.05, 10.0, 1.0).has_value());
+}
+
+TEST(IntensityModel, RobustEstimateFromSeedNeighbourhood) {
+  const auto s = make_volume({30, 30, 30}, Vec3(1, 1, 1), [](const Vec3& p) { return (p - Vec3(15, 15, 15)).norm() < 10; },
+                             400.0, 40.0);
+  const auto m = estimate_intensity_model(s.ct, {Vec3(15, 15, 15)}, {.radius_mm = 4.0});
+  EXPECT_TRUE(test::near(m.reference, 400.0, 15.0));
+  EXPECT_TRUE(test::rel_near(m.tolerance, 2.5 * 40.0, 0.25));
+  EXPECT_THROW((void)estimate_intensity_model(s.ct, {}), InvalidInput);
+  EXPECT_THROW((void)estimate_intensity_model(s.ct, {Vec3(-10, 0, 0)}), InvalidInput);
+}
+
+void expect_valid(const BalloonResult& r, std::int64_t euler) {
+  EXPECT_TRUE(r.report.closed);
+  EXPECT_TRUE(r.report.manifold);
+  EXPECT_TRUE(r.report.oriented);
+  EXPECT_EQ(r.report.self_intersections, 0);
+  EXPECT_EQ(r.report.euler_characteristic, euler);
+  const auto c = check_surface(r.surface);
+  EXPECT_TRUE(c.closed && c.edge_manifold && c.vertex_manifold && c.oriented);
+  EXPECT_TRUE(find_self_intersections(r.surface).empty());
+}
+
+TEST(Balloon, InflatesToSphereWall) {
+  const Vec3 c(16.2, 15.7, 16.4);
+  const double radius = 8.0;
+  const auto s = make_volume({33, 33, 33}, Vec3(1, 1, 1), [&](const Vec3& p) { return (p - c).norm() < radius; }, 300.0, 60.0);
+  const auto r = segment_balloon(s.ct, {Vec3(16, 16, 16)});
+  expect_valid(r, 2);
+  EXPECT_TRUE(r.report.converged);
+  EXPECT_FALSE(r.report.leak_warning);
+  EXPECT_TRUE(test::rel_near(r.report.volume_mm3, 4.0 / 3.0 * kPi * radius * radius * radius, 0.04));
+  const double d = dice(surface_to_mask(r.surface, s.ct), s.truth);
+  EXPECT_GE(d, 0.95);
+  // Vertices lie on the wall: mean |distance − R| well below a voxel.
+  double err = 0;
+  double bias = 0;
+  for (const Vec3& v : r.surface.vertices) err += std::abs((v - c).norm() - radius), bias += (v - c).norm() - radius;
+  EXPECT_LT(err / double(r.surface.vertices.size()), 0.3);
+}
+
+TEST(Balloon, MeetsItselfAroundTorusHoleAndBecomesGenusOne) {
+  const Vec3 c(20, 20, 10);
+  const double R = 10, rr = 4;
+  auto in_torus = [&](const Vec3& p) {
+    const Vec3 q = p - c;
+    const double ring = std::hypot(q.x(), q.y()) - R;
+    return ring * ring + q.z() * q.z() < rr * rr;
+  };
+  const auto s = make_volume({41, 41, 21}, Vec3(1, 1, 1), in_torus, 300.0, 30.0);
+  const auto r = segment_balloon(s.ct, {c + Vec3(R, 0, 0)});
+  expect_valid(r, 0);
+  EXPECT_GE(r.report.repairs, 1);
+  EXPECT_GE(dice(surface_to_mask(r.surface, s.ct), s.truth), 0.93);
+}
+
+TEST(Balloon, OneVoxelGapStopsTheSurface) {
+  // Two bright boxes of the same grey level, 1 voxel of tissue between them.
+  auto left = [](const Vec3& p) { return p.x() > 3.5 && p.x() < 14.5 && p.y() > 4.5 && p.y() < 15.5 && p.z() > 4.5 && p.z() < 15.5; };
+  auto right = [](const Vec3& p) { return p.x() > 15.5 && p.x() < 26.5 && p.y() > 4.5 && p.y() < 15.5 && p.z() > 4.5 && p.z() < 15.5; };
+  const auto s = make_volume({31, 21, 21}, Vec3(1, 1, 1), [&](const Vec3& p) { return left(p) || right(p); }, 300.0, 30.0);
+  const auto r = segment_balloon(s.ct, {Vec3(9, 10, 10)});
+  expect_valid(r, 2);
+  const double box = 11.0 * 11.0 * 11.0;
+  EXPECT_LT(r.report.volume_mm3, 1.15 * box);
+  EXPECT_GT(r.report.volume_mm3, 0.85 * box);
+}
+
+TEST(Balloon, RejectsBadInput) {
+  const image::Volume<float> ct({10, 10, 10});
+  EXPECT_THROW(Balloon(ct, {}), InvalidInput);
+  EXPECT_THROW(Balloon(ct, {Vec3(50, 0, 0)}), InvalidInput);
+  EXPECT_THROW(Balloon(image::Volume<float>{}, {Vec3(0, 0, 0)}), InvalidInput);
+  BalloonOptions o;
+  o.tolerance = -1.0;
+  EXPECT_THROW(Balloon(ct, {Vec3(5, 5, 5)}, o), InvalidInput);
+}
+
+}  // namespace
+}  // namespace ido::segment
