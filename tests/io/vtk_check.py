@@ -4,6 +4,9 @@
 io tests can check ido's writers against an independent implementation.
 
 usage: vtk_check.py KIND FILE     KIND: vtp vtu stl ply obj msh nii mha nrrd
+       vtk_check.py write KIND MODE FILE
+           writes a known mesh with VTK's writers (KIND vtu|vtp, MODE ascii|binary|appended;
+           KIND ply, MODE ascii|binary; KIND stl, MODE ascii|binary) for ido's readers.
 """
 import json
 import sys
@@ -54,7 +57,73 @@ def image_summary(img):
             "values": values(scalars) if scalars is not None else []}
 
 
+def known_points():
+    from vtkmodules.vtkCommonCore import vtkPoints
+    pts = vtkPoints()
+    pts.SetDataTypeToDouble()
+    for p in [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1), (1, 1, 1)]:
+        pts.InsertNextPoint(*p)
+    return pts
+
+
+def add_fields(ds, cells):
+    from vtkmodules.vtkCommonCore import vtkDoubleArray, vtkFloatArray
+    disp = vtkDoubleArray()
+    disp.SetName("displacement_mm")
+    disp.SetNumberOfComponents(3)
+    for i in range(5):
+        disp.InsertNextTuple3(0.5 * i, -0.25 * i, 0.125 * i)
+    ds.GetPointData().AddArray(disp)
+    stress = vtkFloatArray()
+    stress.SetName("stress_pa")
+    for c in range(cells):
+        stress.InsertNextValue(10.0 + 2.5 * c)
+    ds.GetCellData().AddArray(stress)
+
+
+def write(kind, mode, path):
+    """The known mesh: 5 points; vtu: tets (0,1,2,3) and (1,2,3,4)... oriented positively;
+    vtp/ply/stl: triangles (0,2,1), (0,1,3), (1,2,4)."""
+    from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData, vtkUnstructuredGrid, VTK_TETRA
+    from vtkmodules.vtkIOXML import vtkXMLPolyDataWriter, vtkXMLUnstructuredGridWriter
+    from vtkmodules.vtkIOPLY import vtkPLYWriter
+    from vtkmodules.vtkIOGeometry import vtkSTLWriter
+    if kind == "vtu":
+        ds = vtkUnstructuredGrid()
+        ds.SetPoints(known_points())
+        for tet in [(0, 1, 2, 3), (1, 4, 2, 3)]:
+            ds.InsertNextCell(VTK_TETRA, 4, tet)
+        add_fields(ds, 2)
+        w = vtkXMLUnstructuredGridWriter()
+    else:
+        ds = vtkPolyData()
+        ds.SetPoints(known_points())
+        polys = vtkCellArray()
+        for tri in [(0, 2, 1), (0, 1, 3), (1, 2, 4)]:
+            polys.InsertNextCell(3, tri)
+        ds.SetPolys(polys)
+        if kind == "vtp":
+            add_fields(ds, 3)
+        w = {"vtp": vtkXMLPolyDataWriter, "ply": vtkPLYWriter, "stl": vtkSTLWriter}[kind]()
+    w.SetInputData(ds)
+    w.SetFileName(path)
+    if kind in ("vtu", "vtp"):
+        w.SetCompressorTypeToNone()
+        {"ascii": w.SetDataModeToAscii, "binary": w.SetDataModeToBinary,
+         "appended": w.SetDataModeToAppended}[mode]()
+        if mode == "appended":
+            w.EncodeAppendedDataOff()
+    else:
+        w.SetFileTypeToASCII() if mode == "ascii" else w.SetFileTypeToBinary()
+    if not w.Write():
+        return 1
+    print(json.dumps({"written": path}))
+    return 0
+
+
 def main():
+    if sys.argv[1] == "write":
+        return write(sys.argv[2], sys.argv[3], sys.argv[4])
     kind, path = sys.argv[1], sys.argv[2]
     readers = {"vtp": vtkXMLPolyDataReader, "vtu": vtkXMLUnstructuredGridReader,
                "stl": vtkSTLReader, "ply": vtkPLYReader, "obj": vtkOBJReader,

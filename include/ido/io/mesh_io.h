@@ -13,7 +13,7 @@ enum class MeshFormat { Stl, StlAscii, Obj, Ply, PlyAscii, PlyBigEndian, Vtp, Vt
 
 /// Options for writers whose format has variants.
 struct MeshWriteOptions {
-  bool ascii = false;        ///< STL / PLY: ASCII instead of binary
+  bool ascii = false;        ///< STL / PLY / VTK XML (.vtp, .vtu): ASCII instead of binary
   bool big_endian = false;   ///< binary PLY only
   bool gmsh_v2 = false;      ///< .msh: write version 2.2 instead of 4.1
 };

@@ -1,0 +1,53 @@
+// SPDX-License-Identifier: Apache-2.0
+// Private to ido::io (and the fuzz targets): every mesh parser works on the bytes of a
+// whole file held in memory, so the fuzzers can drive them without touching the disk.
+// @p name is the path shown in error messages.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "ido/geometry/tet_mesh.h"
+#include "ido/geometry/triangle_mesh.h"
+#include "ido/io/pvd.h"
+
+namespace ido::io::detail {
+
+/// The whole file as bytes. @throws IoError if missing, a folder, unreadable or empty.
+std::string read_file_bytes(const std::filesystem::path& path);
+
+geometry::TriangleMesh parse_stl(std::string_view bytes, const std::string& name);
+geometry::TriangleMesh parse_obj(std::string_view bytes, const std::string& name);
+geometry::TriangleMesh parse_ply(std::string_view bytes, const std::string& name);
+geometry::TriangleMesh parse_vtp(std::string_view bytes, const std::string& name);
+geometry::TetMesh parse_vtu(std::string_view bytes, const std::string& name);
+geometry::TetMesh parse_gmsh_tets(std::string_view bytes, const std::string& name);
+geometry::TriangleMesh parse_gmsh_triangles(std::string_view bytes, const std::string& name);
+/// TetGen: the .node text and the .ele text (named separately in errors).
+geometry::TetMesh parse_tetgen(std::string_view node_bytes, const std::string& node_name,
+                               std::string_view ele_bytes, const std::string& ele_name);
+std::vector<PvdEntry> parse_pvd(std::string_view bytes, const std::string& name);
+
+void write_stl(std::ostream& out, const geometry::TriangleMesh& mesh, bool ascii);
+void write_obj(std::ostream& out, const geometry::TriangleMesh& mesh);
+void write_ply(std::ostream& out, const geometry::TriangleMesh& mesh, bool ascii, bool big_endian);
+void write_vtp(std::ostream& out, const geometry::TriangleMesh& mesh, bool ascii);
+void write_vtu(std::ostream& out, const geometry::TetMesh& mesh, bool ascii);
+void write_gmsh(std::ostream& out, const geometry::TetMesh& mesh, bool version2);
+void write_gmsh_triangles(std::ostream& out, const geometry::TriangleMesh& mesh, bool version2);
+void write_tetgen_node(std::ostream& out, const geometry::TetMesh& mesh);
+void write_tetgen_ele(std::ostream& out, const geometry::TetMesh& mesh);
+
+/// Checks a parsed mesh: finite coordinates, indices in range, and for tetrahedra positive
+/// non-degenerate volume. @p element_lines (optional) gives each element's 1-based line
+/// for the message. @throws ido::InvalidInput naming @p name, the element and the problem.
+void validate(const geometry::TriangleMesh& mesh, const std::string& name,
+              const std::vector<std::int64_t>& vertex_lines = {},
+              const std::vector<std::int64_t>& element_lines = {});
+void validate(const geometry::TetMesh& mesh, const std::string& name,
+              const std::vector<std::int64_t>& vertex_lines = {},
+              const std::vector<std::int64_t>& element_lines = {});
+
+}  // namespace ido::io::detail

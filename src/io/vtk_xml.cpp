@@ -1,0 +1,552 @@
+// SPDX-License-Identifier: Apache-2.0
+// VTK XML PolyData (.vtp) and UnstructuredGrid (.vtu), following "VTK File Formats"
+// (VTK User's Guide, Kitware). Read: DataArrays in ascii, inline base64 binary, and
+// appended raw or base64 data, UInt32 or UInt64 block headers, uncompressed. Written:
+// inline base64 binary with UInt64 headers (exact), or ascii with 17 significant digits.
+#include <cmath>
+#include <cstring>
+
+#include <fmt/format.h>
+
+#include "parsers.h"
+#include "text_parser.h"
+#include "xml_lite.h"
+
+namespace ido::io::detail {
+namespace {
+
+constexpr char kB64[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+
+std::string base64_encode(std::string_view in) {
+  std::string out;
+  out.reserve((in.size() + 2) / 3 * 4);
+  std::size_t i = 0;
+  for (; i + 2 < in.size(); i += 3) {
+    const auto n = (std::uint32_t(std::uint8_t(in[i])) << 16) | (std::uint32_t(std::uint8_t(in[i + 1])) << 8) |
+                   std::uint8_t(in[i + 2]);
+    out += kB64[n >> 18];
+    out += kB64[(n >> 12) & 63];
+    out += kB64[(n >> 6) & 63];
+    out += kB64[n & 63];
+  }
+  if (i < in.size()) {
+    std::uint32_t n = std::uint32_t(std::uint8_t(in[i])) << 16;
+    if (i + 1 < in.size()) n |= std::uint32_t(std::uint8_t(in[i + 1])) << 8;
+    out += kB64[n >> 18];
+    out += kB64[(n >> 12) & 63];
+    out += i + 1 < in.size() ? kB64[(n >> 6) & 63] : '=';
+    out += '=';
+  }
+  return out;
+}
+
+/// Decodes base64, skipping whitespace; false on a character outside the alphabet.
+bool base64_decode(std::string_view in, std::string& out) {
+  out.clear();
+  std::uint32_t acc = 0;
+  int bits = 0;
+  for (char c : in) {
+    int v;
+    if (c >= 'A' && c <= 'Z') v = c - 'A';
+    else if (c >= 'a' && c <= 'z') v = c - 'a' + 26;
+    else if (c >= '0' && c <= '9') v = c - '0' + 52;
+    else if (c == '+') v = 62;
+    else if (c == '/') v = 63;
+    else if (c == '=' || c == ' ' || c == '\n' || c == '\r' || c == '\t') continue;
+    else return false;
+    acc = (acc << 6) | static_cast<std::uint32_t>(v);
+    bits += 6;
+    if (bits >= 8) {
+      bits -= 8;
+      out += static_cast<char>((acc >> bits) & 0xFF);
+    }
+  }
+  return true;
+}
+
+struct TypeInfo {
+  int size = 0;
+  bool is_float = false;
+  bool is_signed = false;
+};
+
+bool type_info(std::string_view t, TypeInfo& i) {
+  if (t == "Float32") i = {4, true, true};
+  else if (t == "Float64") i = {8, true, true};
+  else if (t == "Int8") i = {1, false, true};
+  else if (t == "UInt8") i = {1, false, false};
+  else if (t == "Int16") i = {2, false, true};
+  else if (t == "UInt16") i = {2, false, false};
+  else if (t == "Int32") i = {4, false, true};
+  else if (t == "UInt32") i = {4, false, false};
+  else if (t == "Int64") i = {8, false, true};
+  else if (t == "UInt64") i = {8, false, false};
+  else return false;
+  return true;
+}
+
+double decode_value(const char* p, const TypeInfo& t, bool big_endian) {
+  unsigned char b[8];
+  std::memcpy(b, p, static_cast<std::size_t>(t.size));
+  if (big_endian != (std::endian::native == std::endian::big))
+    std::reverse(b, b + t.size);
+  if (t.is_float) {
+    if (t.size == 4) {
+      float f;
+      std::memcpy(&f, b, 4);
+      return f;
+    }
+    double d;
+    std::memcpy(&d, b, 8);
+    return d;
+  }
+  switch (t.size) {
+    case 1: return t.is_signed ? double(std::int8_t(b[0])) : double(b[0]);
+    case 2: {
+      std::uint16_t u;
+      std::memcpy(&u, b, 2);
+      return t.is_signed ? double(std::int16_t(u)) : double(u);
+    }
+    case 4: {
+      std::uint32_t u;
+      std::memcpy(&u, b, 4);
+      return t.is_signed ? double(std::int32_t(u)) : double(u);
+    }
+    default: {
+      std::uint64_t u;
+      std::memcpy(&u, b, 8);
+      return t.is_signed ? double(std::int64_t(u)) : double(u);
+    }
+  }
+}
+
+/// A whole VTK XML file: the parsed tree plus the appended-data block, if any.
+struct VtkDocument {
+  std::string_view bytes;
+  std::string name;
+  std::unique_ptr<XmlNode> root;
+  std::string_view appended;  ///< bytes after the '_' marker
+  bool appended_base64 = false;
+  bool big_endian = false;
+  int header_size = 4;
+
+  [[noreturn]] void fail(const XmlNode& at, const std::string& problem) const {
+    throw IoError(name, problem, {.line = line_at(bytes, at.offset), .byte_offset = std::nullopt});
+  }
+};
+
+VtkDocument open_document(std::string_view bytes, const std::string& name, const char* expected_type) {
+  VtkDocument doc;
+  doc.bytes = bytes;
+  doc.name = name;
+  // The appended block may hold raw binary, which is not XML: cut it out before parsing.
+  const auto app = bytes.find("<AppendedData");
+  std::string xml;
+  if (app != std::string_view::npos) {
+    const auto gt = bytes.find('>', app);
+    const auto underscore = gt == std::string_view::npos ? gt : bytes.find('_', gt);
+    if (underscore == std::string_view::npos)
+      throw IoError(name, "<AppendedData> without its '_' marker", {.line = line_at(bytes, app), .byte_offset = std::nullopt});
+    const auto close = bytes.rfind("</AppendedData>");
+    if (close == std::string_view::npos || close < underscore)
+      throw IoError(name, "<AppendedData> is not closed (truncated?)", {.line = line_at(bytes, app), .byte_offset = std::nullopt});
+    doc.appended = bytes.substr(underscore + 1, close - underscore - 1);
+    const std::string tag(bytes.substr(app, gt - app));
+    doc.appended_base64 = tag.find("\"base64\"") != std::string::npos;
+    xml = std::string(bytes.substr(0, app));
+    // Everything up to the appended block, closed again so that it parses; the tail after
+    // </AppendedData> only closes VTKFile.
+    xml += "</VTKFile>";
+  } else {
+    xml = std::string(bytes);
+  }
+  doc.root = parse_xml(xml, name);
+  const XmlNode& r = *doc.root;
+  if (r.name != "VTKFile") doc.fail(r, fmt::format("root element is <{}>, expected <VTKFile>", r.name));
+  const std::string* type = r.attribute("type");
+  if (!type || *type != expected_type)
+    doc.fail(r, fmt::format("VTKFile type is '{}', expected '{}'", type ? *type : "", expected_type));
+  if (const auto* c = r.attribute("compressor"); c && !c->empty())
+    doc.fail(r, fmt::format("compressed VTK XML ({}) is not supported; save uncompressed", *c));
+  if (const auto* bo = r.attribute("byte_order")) doc.big_endian = *bo == "BigEndian";
+  if (const auto* ht = r.attribute("header_type")) {
+    if (*ht == "UInt64") doc.header_size = 8;
+    else if (*ht == "UInt32") doc.header_size = 4;
+    else doc.fail(r, fmt::format("unknown header_type '{}'", *ht));
+  }
+  return doc;
+}
+
+/// A DataArray's values as doubles. @p expected_tuples × components values must result.
+std::vector<double> read_array(const VtkDocument& doc, const XmlNode& a, std::size_t expected_tuples,
+                               int* components_out = nullptr) {
+  const std::string* type = a.attribute("type");
+  TypeInfo ti;
+  if (!type || !type_info(*type, ti)) doc.fail(a, fmt::format("DataArray has unsupported type '{}'", type ? *type : ""));
+  int comps = 1;
+  if (const auto* nc = a.attribute("NumberOfComponents")) {
+    std::int64_t v;
+    if (!to_int(*nc, v) || v < 1 || v > 64) doc.fail(a, fmt::format("bad NumberOfComponents '{}'", *nc));
+    comps = static_cast<int>(v);
+  }
+  if (components_out) *components_out = comps;
+  const std::size_t expected = expected_tuples * static_cast<std::size_t>(comps);
+  const std::string* fmt_attr = a.attribute("format");
+  const std::string format = fmt_attr ? *fmt_attr : "ascii";
+  const std::string array_name = a.attribute("Name") ? *a.attribute("Name") : std::string("(unnamed)");
+  std::vector<double> out;
+  auto from_bytes = [&](std::string_view raw, const char* where) {
+    if (raw.size() < static_cast<std::size_t>(doc.header_size))
+      doc.fail(a, fmt::format("DataArray '{}': {} data shorter than its header", array_name, where));
+    const double declared = decode_value(raw.data(), {doc.header_size, false, false}, doc.big_endian);
+    const std::size_t need = expected * static_cast<std::size_t>(ti.size);
+    if (declared != static_cast<double>(need))
+      doc.fail(a, fmt::format("DataArray '{}' declares {} bytes, expected {} ({} values of {} bytes)", array_name,
+                              declared, need, expected, ti.size));
+    if (raw.size() - static_cast<std::size_t>(doc.header_size) < need)
+      doc.fail(a, fmt::format("DataArray '{}': data ends after {} of {} bytes (truncated?)", array_name,
+                              raw.size() - static_cast<std::size_t>(doc.header_size), need));
+    out.resize(expected);
+    const char* p = raw.data() + doc.header_size;
+    for (std::size_t i = 0; i < expected; ++i) out[i] = decode_value(p + i * static_cast<std::size_t>(ti.size), ti, doc.big_endian);
+  };
+  /// Base64 text holding header + data, encoded either as one stream or as two blocks.
+  auto from_base64 = [&](std::string_view text, const char* where) {
+    std::size_t first = 0;
+    while (first < text.size() && std::isspace(static_cast<unsigned char>(text[first]))) ++first;
+    text.remove_prefix(first);
+    const std::size_t header_chars = (static_cast<std::size_t>(doc.header_size) + 2) / 3 * 4;
+    std::string decoded, part;
+    if (text.substr(0, header_chars).find('=') != std::string_view::npos) {  // separate blocks
+      if (!base64_decode(text.substr(0, header_chars), decoded) || !base64_decode(text.substr(header_chars), part))
+        doc.fail(a, fmt::format("DataArray '{}': invalid base64 {} data", array_name, where));
+      decoded += part;
+    } else if (!base64_decode(text, decoded)) {
+      doc.fail(a, fmt::format("DataArray '{}': invalid base64 {} data", array_name, where));
+    }
+    from_bytes(decoded, where);
+  };
+  const std::string_view content = doc.root ? std::string_view{} : std::string_view{};
+  (void)content;
+  if (format == "ascii") {
+    TextCursor tc(doc.bytes.substr(a.text_begin, a.text_end - a.text_begin), doc.name);
+    const std::int64_t base_line = line_at(doc.bytes, a.text_begin) - 1;
+    out.reserve(expected);
+    while (!tc.at_end()) {
+      const auto t = tc.next();
+      double v;
+      if (!to_double(t, v))
+        throw IoError(doc.name, fmt::format("DataArray '{}': expected a number, found '{}'", array_name, t.substr(0, 40)),
+                      {.line = base_line + tc.line(), .byte_offset = std::nullopt});
+      out.push_back(v);
+      if (out.size() > expected) break;
+    }
+    if (out.size() != expected)
+      doc.fail(a, fmt::format("DataArray '{}' holds {} values, expected {}", array_name, out.size() > expected ? "more" : std::to_string(out.size()), expected));
+  } else if (format == "binary") {
+    from_base64(doc.bytes.substr(a.text_begin, a.text_end - a.text_begin), "inline");
+  } else if (format == "appended") {
+    std::int64_t off = 0;
+    const std::string* o = a.attribute("offset");
+    if (!o || !to_int(*o, off) || off < 0) doc.fail(a, fmt::format("DataArray '{}' has no valid offset", array_name));
+    if (static_cast<std::size_t>(off) > doc.appended.size())
+      doc.fail(a, fmt::format("DataArray '{}': offset {} lies beyond the appended data ({} bytes)", array_name, off,
+                              doc.appended.size()));
+    const std::string_view rest = doc.appended.substr(static_cast<std::size_t>(off));
+    if (doc.appended_base64) from_base64(rest.substr(0, rest.find_first_of(" \n\r\t")), "appended");
+    else from_bytes(rest, "appended");
+  } else {
+    doc.fail(a, fmt::format("DataArray '{}' has unknown format '{}'", array_name, format));
+  }
+  return out;
+}
+
+std::size_t count_attr(const VtkDocument& doc, const XmlNode& piece, const char* attr, bool required) {
+  const std::string* s = piece.attribute(attr);
+  if (!s) {
+    if (required) doc.fail(piece, fmt::format("<Piece> lacks {}", attr));
+    return 0;
+  }
+  std::int64_t v;
+  if (!to_int(*s, v) || v < 0) doc.fail(piece, fmt::format("<Piece> {}='{}' is not a count", attr, *s));
+  // Guard allocations: every point or cell needs at least one byte of file.
+  if (static_cast<std::uint64_t>(v) > doc.bytes.size() * 4 + 64)
+    doc.fail(piece, fmt::format("<Piece> {}={} is larger than the file can hold", attr, v));
+  return static_cast<std::size_t>(v);
+}
+
+const XmlNode& single_piece(const VtkDocument& doc, const char* dataset) {
+  const XmlNode* ds = doc.root->child(dataset);
+  if (!ds) doc.fail(*doc.root, fmt::format("no <{}> element", dataset));
+  const auto pieces = ds->children_named("Piece");
+  if (pieces.size() != 1) doc.fail(*ds, fmt::format("{} <Piece> elements; exactly one is supported", pieces.size()));
+  return *pieces.front();
+}
+
+std::vector<Vec3> read_points(const VtkDocument& doc, const XmlNode& piece, std::size_t n) {
+  const XmlNode* pts = piece.child("Points");
+  if (!pts && n > 0) doc.fail(piece, "<Piece> has no <Points>");
+  std::vector<Vec3> out(n);
+  if (n == 0) return out;
+  const XmlNode* arr = pts->child("DataArray");
+  if (!arr) doc.fail(*pts, "<Points> has no <DataArray>");
+  int comps = 0;
+  const auto v = read_array(doc, *arr, n, &comps);
+  if (comps != 3) doc.fail(*arr, fmt::format("points have {} components, expected 3", comps));
+  for (std::size_t i = 0; i < n; ++i) {
+    out[i] = Vec3(v[3 * i], v[3 * i + 1], v[3 * i + 2]);
+    if (!out[i].allFinite())
+      invalid(doc.name, fmt::format("point {} has a non-finite coordinate", i), {.line = line_at(doc.bytes, arr->offset), .byte_offset = std::nullopt});
+  }
+  return out;
+}
+
+/// connectivity + offsets of a cell block (Polys, Cells).
+struct CellBlock {
+  std::vector<double> connectivity;
+  std::vector<double> offsets;
+};
+
+CellBlock read_cells(const VtkDocument& doc, const XmlNode& block, std::size_t cells, std::size_t points) {
+  CellBlock cb;
+  const XmlNode* conn = nullptr;
+  const XmlNode* offs = nullptr;
+  for (const auto* a : block.children_named("DataArray")) {
+    const std::string* n = a->attribute("Name");
+    if (n && *n == "connectivity") conn = a;
+    if (n && *n == "offsets") offs = a;
+  }
+  if (!conn || !offs) doc.fail(block, fmt::format("<{}> needs 'connectivity' and 'offsets' arrays", block.name));
+  cb.offsets = read_array(doc, *offs, cells);
+  double prev = 0;
+  for (std::size_t c = 0; c < cells; ++c) {
+    if (cb.offsets[c] < prev || cb.offsets[c] != std::floor(cb.offsets[c]))
+      doc.fail(*offs, fmt::format("offsets decrease or are not integers at cell {}", c));
+    prev = cb.offsets[c];
+  }
+  if (prev > 1e9) doc.fail(*offs, "offsets are implausibly large");
+  cb.connectivity = read_array(doc, *conn, static_cast<std::size_t>(prev));
+  for (std::size_t i = 0; i < cb.connectivity.size(); ++i) {
+    const double v = cb.connectivity[i];
+    if (v < 0 || v >= static_cast<double>(points) || v != std::floor(v))
+      invalid(doc.name, fmt::format("connectivity entry {} refers to point {}, but there are {} points", i, v, points),
+              {.line = line_at(doc.bytes, conn->offset), .byte_offset = std::nullopt});
+  }
+  return cb;
+}
+
+/// Point or cell data arrays, with each value picked through @p keep (source index per
+/// output entity).
+geometry::FieldMap read_fields(const VtkDocument& doc, const XmlNode* data, std::size_t count,
+                               const std::vector<std::size_t>* keep) {
+  geometry::FieldMap out;
+  if (!data) return out;
+  for (const auto* a : data->children_named("DataArray")) {
+    const std::string* n = a->attribute("Name");
+    const std::string* t = a->attribute("type");
+    TypeInfo ti;
+    if (!n || !t || !type_info(*t, ti)) continue;  // e.g. String arrays: not fields
+    geometry::Field f;
+    auto values = read_array(doc, *a, count, &f.components);
+    if (keep) {
+      const auto c = static_cast<std::size_t>(f.components);
+      f.values.reserve(keep->size() * c);
+      for (std::size_t src : *keep)
+        for (std::size_t k = 0; k < c; ++k) f.values.push_back(values[src * c + k]);
+    } else {
+      f.values = std::move(values);
+    }
+    out[*n] = std::move(f);
+  }
+  return out;
+}
+
+// ---- writing ---------------------------------------------------------------------------
+
+class ArrayWriter {
+ public:
+  ArrayWriter(std::ostream& out, bool ascii) : m_out(out), m_ascii(ascii) {}
+
+  void doubles(const std::string& name, int comps, const std::vector<double>& v, const char* indent) {
+    open("Float64", name, comps, indent);
+    if (m_ascii) {
+      for (std::size_t i = 0; i < v.size(); ++i) m_out << (i % 9 ? " " : "\n") << fmt::format("{:.17g}", v[i]);
+    } else {
+      m_out << encode(v.data(), v.size() * sizeof(double));
+    }
+    close(indent);
+  }
+  void int64s(const std::string& name, const std::vector<std::int64_t>& v, const char* indent) {
+    open("Int64", name, 1, indent);
+    if (m_ascii) {
+      for (std::size_t i = 0; i < v.size(); ++i) m_out << (i % 12 ? " " : "\n") << v[i];
+    } else {
+      m_out << encode(v.data(), v.size() * sizeof(std::int64_t));
+    }
+    close(indent);
+  }
+  void uint8s(const std::string& name, const std::vector<std::uint8_t>& v, const char* indent) {
+    open("UInt8", name, 1, indent);
+    if (m_ascii) {
+      for (std::size_t i = 0; i < v.size(); ++i) m_out << (i % 20 ? " " : "\n") << int(v[i]);
+    } else {
+      m_out << encode(v.data(), v.size());
+    }
+    close(indent);
+  }
+
+ private:
+  void open(const char* type, const std::string& name, int comps, const char* indent) {
+    m_out << indent << "<DataArray type=\"" << type << "\" Name=\"" << xml_escape(name) << "\"";
+    if (comps != 1) m_out << " NumberOfComponents=\"" << comps << "\"";
+    m_out << " format=\"" << (m_ascii ? "ascii" : "binary") << "\">";
+    if (!m_ascii) m_out << "\n" << indent << "  ";
+  }
+  void close(const char* indent) { m_out << "\n" << indent << "</DataArray>\n"; }
+  /// One base64 stream of a UInt64 byte count followed by the little-endian data.
+  static std::string encode(const void* data, std::size_t bytes) {
+    static_assert(std::endian::native == std::endian::little, "writer assumes a little-endian host");
+    std::string raw(8 + bytes, '\0');
+    const std::uint64_t n = bytes;
+    std::memcpy(raw.data(), &n, 8);
+    if (bytes) std::memcpy(raw.data() + 8, data, bytes);
+    return base64_encode(raw);
+  }
+  std::ostream& m_out;
+  bool m_ascii;
+};
+
+std::vector<double> flatten(const std::vector<Vec3>& pts) {
+  std::vector<double> v;
+  v.reserve(pts.size() * 3);
+  for (const auto& p : pts) v.insert(v.end(), {p.x(), p.y(), p.z()});
+  return v;
+}
+
+void write_fields(ArrayWriter& w, std::ostream& out, const char* tag, const geometry::FieldMap& fields) {
+  out << "      <" << tag << ">\n";
+  for (const auto& [name, f] : fields) w.doubles(name, f.components, f.values, "        ");
+  out << "      </" << tag << ">\n";
+}
+
+void header(std::ostream& out, const char* type) {
+  out << "<?xml version=\"1.0\"?>\n<VTKFile type=\"" << type
+      << "\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n  <" << type << ">\n";
+}
+
+}  // namespace
+
+geometry::TriangleMesh parse_vtp(std::string_view bytes, const std::string& name) {
+  const VtkDocument doc = open_document(bytes, name, "PolyData");
+  const XmlNode& piece = single_piece(doc, "PolyData");
+  const std::size_t np = count_attr(doc, piece, "NumberOfPoints", true);
+  const std::size_t nverts = count_attr(doc, piece, "NumberOfVerts", false);
+  const std::size_t nlines = count_attr(doc, piece, "NumberOfLines", false);
+  const std::size_t nstrips = count_attr(doc, piece, "NumberOfStrips", false);
+  const std::size_t npolys = count_attr(doc, piece, "NumberOfPolys", false);
+  geometry::TriangleMesh mesh;
+  mesh.vertices = read_points(doc, piece, np);
+  std::vector<std::size_t> source_cell;  // VTK cell index of each triangle (verts, lines, strips, polys order)
+  const std::size_t first_poly = nverts + nlines + nstrips;
+  if (npolys > 0) {
+    const XmlNode* polys = piece.child("Polys");
+    if (!polys) doc.fail(piece, "NumberOfPolys > 0 but no <Polys>");
+    const CellBlock cb = read_cells(doc, *polys, npolys, np);
+    std::size_t begin = 0;
+    for (std::size_t c = 0; c < npolys; ++c) {
+      const auto end = static_cast<std::size_t>(cb.offsets[c]);
+      if (end - begin < 3) doc.fail(*polys, fmt::format("polygon {} has {} points, expected at least 3", c, end - begin));
+      for (std::size_t k = begin + 1; k + 1 < end; ++k) {
+        mesh.triangles.push_back({static_cast<std::int32_t>(cb.connectivity[begin]),
+                                  static_cast<std::int32_t>(cb.connectivity[k]),
+                                  static_cast<std::int32_t>(cb.connectivity[k + 1])});
+        source_cell.push_back(first_poly + c);
+      }
+      begin = end;
+    }
+  }
+  mesh.point_fields = read_fields(doc, piece.child("PointData"), np, nullptr);
+  mesh.cell_fields = read_fields(doc, piece.child("CellData"), first_poly + npolys, &source_cell);
+  validate(mesh, name);
+  return mesh;
+}
+
+geometry::TetMesh parse_vtu(std::string_view bytes, const std::string& name) {
+  const VtkDocument doc = open_document(bytes, name, "UnstructuredGrid");
+  const XmlNode& piece = single_piece(doc, "UnstructuredGrid");
+  const std::size_t np = count_attr(doc, piece, "NumberOfPoints", true);
+  const std::size_t nc = count_attr(doc, piece, "NumberOfCells", true);
+  geometry::TetMesh mesh;
+  mesh.vertices = read_points(doc, piece, np);
+  std::vector<std::size_t> kept;
+  std::vector<std::int64_t> element_lines;
+  if (nc > 0) {
+    const XmlNode* cells = piece.child("Cells");
+    if (!cells) doc.fail(piece, "NumberOfCells > 0 but no <Cells>");
+    const CellBlock cb = read_cells(doc, *cells, nc, np);
+    const XmlNode* types_node = nullptr;
+    for (const auto* a : cells->children_named("DataArray"))
+      if (const auto* n = a->attribute("Name"); n && *n == "types") types_node = a;
+    if (!types_node) doc.fail(*cells, "<Cells> has no 'types' array");
+    const auto types = read_array(doc, *types_node, nc);
+    std::size_t begin = 0;
+    for (std::size_t c = 0; c < nc; ++c) {
+      const auto end = static_cast<std::size_t>(cb.offsets[c]);
+      if (types[c] == 10) {  // VTK_TETRA; other cell types are not part of a TetMesh
+        if (end - begin != 4) doc.fail(*cells, fmt::format("tetrahedron {} has {} points, expected 4", c, end - begin));
+        mesh.tets.push_back({static_cast<std::int32_t>(cb.connectivity[begin]), static_cast<std::int32_t>(cb.connectivity[begin + 1]),
+                             static_cast<std::int32_t>(cb.connectivity[begin + 2]), static_cast<std::int32_t>(cb.connectivity[begin + 3])});
+        kept.push_back(c);
+      }
+      begin = end;
+    }
+  }
+  mesh.point_fields = read_fields(doc, piece.child("PointData"), np, nullptr);
+  mesh.cell_fields = read_fields(doc, piece.child("CellData"), nc, &kept);
+  validate(mesh, name);
+  return mesh;
+}
+
+void write_vtp(std::ostream& out, const geometry::TriangleMesh& mesh, bool ascii) {
+  ArrayWriter w(out, ascii);
+  header(out, "PolyData");
+  out << "    <Piece NumberOfPoints=\"" << mesh.vertices.size() << "\" NumberOfVerts=\"0\" NumberOfLines=\"0\" "
+      << "NumberOfStrips=\"0\" NumberOfPolys=\"" << mesh.triangles.size() << "\">\n";
+  write_fields(w, out, "PointData", mesh.point_fields);
+  write_fields(w, out, "CellData", mesh.cell_fields);
+  out << "      <Points>\n";
+  w.doubles("Points", 3, flatten(mesh.vertices), "        ");
+  out << "      </Points>\n      <Polys>\n";
+  std::vector<std::int64_t> conn, offsets;
+  conn.reserve(mesh.triangles.size() * 3);
+  for (const auto& t : mesh.triangles) {
+    conn.insert(conn.end(), t.begin(), t.end());
+    offsets.push_back(static_cast<std::int64_t>(conn.size()));
+  }
+  w.int64s("connectivity", conn, "        ");
+  w.int64s("offsets", offsets, "        ");
+  out << "      </Polys>\n    </Piece>\n  </PolyData>\n</VTKFile>\n";
+}
+
+void write_vtu(std::ostream& out, const geometry::TetMesh& mesh, bool ascii) {
+  ArrayWriter w(out, ascii);
+  header(out, "UnstructuredGrid");
+  out << "    <Piece NumberOfPoints=\"" << mesh.vertices.size() << "\" NumberOfCells=\"" << mesh.tets.size() << "\">\n";
+  write_fields(w, out, "PointData", mesh.point_fields);
+  write_fields(w, out, "CellData", mesh.cell_fields);
+  out << "      <Points>\n";
+  w.doubles("Points", 3, flatten(mesh.vertices), "        ");
+  out << "      </Points>\n      <Cells>\n";
+  std::vector<std::int64_t> conn, offsets;
+  conn.reserve(mesh.tets.size() * 4);
+  for (const auto& t : mesh.tets) {
+    conn.insert(conn.end(), t.begin(), t.end());
+    offsets.push_back(static_cast<std::int64_t>(conn.size()));
+  }
+  w.int64s("connectivity", conn, "        ");
+  w.int64s("offsets", offsets, "        ");
+  w.uint8s("types", std::vector<std::uint8_t>(mesh.tets.size(), 10), "        ");
+  out << "      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n";
+}
+
+}  // namespace ido::io::detail
