@@ -33,13 +33,25 @@ std::array<std::array<Vec3, 4>, 8> red_children(const std::array<Vec3, 4>& x) no
 
 namespace {
 
-// Worst mean ratio over depths 1 and 2 (every congruence class of Bey's refinement of
-// an ordered tetrahedron appears by depth 2).
+// Cube of the mean ratio up to a constant, V² / (Σ l²)³ (monotone in the mean ratio, no pow).
+double quality_cubed(const std::array<Vec3, 4>& x) noexcept {
+  const double v = signed_volume(x[0], x[1], x[2], x[3]);
+  double l2 = 0.0;
+  for (std::size_t i = 0; i < 4; ++i)
+    for (std::size_t j = i + 1; j < 4; ++j) l2 += (x[i] - x[j]).squaredNorm();
+  return v * v / (l2 * l2 * l2);
+}
+
+// Worst quality over the descendants of an ordered tetrahedron: corner children are
+// similar to their parent, so the inner children (slots 4–7) and their children hold
+// every class.
 double worst_descendant_quality(const std::array<Vec3, 4>& x) {
-  double worst = 1.0;
-  for (const auto& c : red_children(x)) {
-    worst = std::min(worst, tet_mean_ratio(c));
-    for (const auto& g : red_children(c)) worst = std::min(worst, tet_mean_ratio(g));
+  double worst = quality_cubed(x);
+  const auto c = red_children(x);
+  for (std::size_t s = 4; s < 8; ++s) {
+    worst = std::min(worst, quality_cubed(c[s]));
+    const auto g = red_children(c[s]);
+    for (std::size_t k = 4; k < 8; ++k) worst = std::min(worst, quality_cubed(g[k]));
   }
   return worst;
 }

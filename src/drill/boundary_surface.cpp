@@ -1,0 +1,337 @@
+// SPDX-License-Identifier: Apache-2.0
+// Hand-written: the project's v_list extraction across hierarchy levels and conforming assembly.
+#include "ido/drill/boundary_surface.h"
+
+#include <algorithm>
+#include <tuple>
+#include <unordered_map>
+#include <unordered_set>
+
+namespace ido::drill {
+namespace {
+
+struct KeyHash {
+  std::size_t operator()(const PointKey& k) const noexcept {
+    // splitmix64 finaliser over the packed (id, weight) pairs.
+    auto mix = [](std::uint64_t x) {
+      x += 0x9E3779B97F4A7C15ULL;
+      x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
+      x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
+      return x ^ (x >> 31);
+    };
+    std::uint64_t h = 0;
+    for (std::size_t i = 0; i < 4; ++i) {
+      h = mix(h ^ ((static_cast<std::uint64_t>(static_cast<std::uint32_t>(k.id[i])) << 32) |
+                   static_cast<std::uint32_t>(k.weight[i])));
+    }
+    return static_cast<std::size_t>(h);
+  }
+};
+
+// Outward face vertex order of a positively oriented tetrahedron: face f is opposite f.
+constexpr int kFaceVerts[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+
+PointKey midpoint(const PointKey& a, const PointKey& b, bool& exact) {
+  std::array<std::int32_t, 8> id{};
+  std::array<std::int32_t, 8> w{};
+  int n = 0;
+  auto add = [&](std::int32_t i, std::int32_t wt) {
+    for (int k = 0; k < n; ++k)
+      if (id[static_cast<std::size_t>(k)] == i) {
+        w[static_cast<std::size_t>(k)] += wt;
+        return;
+      }
+    id[static_cast<std::size_t>(n)] = i;
+    w[static_cast<std::size_t>(n)] = wt;
+    ++n;
+  };
+  for (std::size_t k = 0; k < 4; ++k) {
+    if (a.id[k] >= 0) add(a.id[k], a.weight[k]);
+    if (b.id[k] >= 0) add(b.id[k], b.weight[k]);
+  }
+  exact = n <= 4;
+  PointKey m;
+  if (!exact) return m;
+  // Sort by id.
+  for (int i = 1; i < n; ++i)
+    for (int j = i; j > 0 && id[static_cast<std::size_t>(j - 1)] > id[static_cast<std::size_t>(j)]; --j) {
+      std::swap(id[static_cast<std::size_t>(j - 1)], id[static_cast<std::size_t>(j)]);
+      std::swap(w[static_cast<std::size_t>(j - 1)], w[static_cast<std::size_t>(j)]);
+    }
+  for (int k = 0; k < n; ++k) {
+    if (w[static_cast<std::size_t>(k)] % 2 != 0) {
+      exact = false;
+      return m;
+    }
+    m.id[static_cast<std::size_t>(k)] = id[static_cast<std::size_t>(k)];
+    m.weight[static_cast<std::size_t>(k)] = w[static_cast<std::size_t>(k)] / 2;
+  }
+  return m;
+}
+
+// Unordered pair code of a child vertex (parent vertex indices a, b).
+int pair_code(int a, int b) { return a < b ? a * 4 + b : b * 4 + a; }
+
+// What lies across face f of node n. For a neighbour at the same depth, vmap[k] gives, for
+// each vertex k ≠ f of n, the index of the same point among the neighbour's vertices.
+struct Across {
+  bool boundary = false;
+  NodeRef node;
+  int face = -1;
+  std::array<int, 4> vmap{-1, -1, -1, -1};
+};
+
+// Child c of a node with vertex-pair codes `codes` (3 pairs in the node's local indices, on
+// the node's face g): finds the child slot, its face on g, and its local index per code.
+bool find_child_face(int g, const std::array<int, 3>& codes, int& child, int& child_face, std::array<int, 3>& local) {
+  const TreeTable& t = TreeTable::get();
+  for (int c = 0; c < 8; ++c)
+    for (int cg = 0; cg < 4; ++cg) {
+      if (t.face_link[static_cast<std::size_t>(c)][static_cast<std::size_t>(cg)].parent_face != g) continue;
+      bool all = true;
+      for (std::size_t i = 0; i < 3 && all; ++i) {
+        int found = -1;
+        for (int k = 0; k < 4; ++k) {
+          if (k == cg) continue;
+          const auto& e = t.vertex[static_cast<std::size_t>(c)][static_cast<std::size_t>(k)];
+          if (pair_code(e[0], e[1]) == codes[i]) found = k;
+        }
+        local[i] = found;
+        all = found >= 0;
+      }
+      if (all) {
+        child = c;
+        child_face = cg;
+        return true;
+      }
+    }
+  return false;
+}
+
+Across across(const TetHierarchy& h, const NodeRef& n, int f) {
+  if (n.depth == 0) {
+    const auto nb = h.root_neighbor(n.root, f);
+    if (nb.root < 0) return {true, {}, -1, {}};
+    Across a{false, NodeRef{static_cast<std::uint32_t>(nb.root), 0, 0}, nb.face, {-1, -1, -1, -1}};
+    const Tet& mine = h.root_tet(n.root);
+    const Tet& other = h.root_tet(static_cast<std::size_t>(nb.root));
+    for (std::size_t k = 0; k < 4; ++k)
+      for (std::size_t k2 = 0; k2 < 4; ++k2)
+        if (mine[k] == other[k2]) a.vmap[k] = static_cast<int>(k2);
+    return a;
+  }
+  const TreeTable& t = TreeTable::get();
+  const auto s = static_cast<std::size_t>(n.slot(n.depth));
+  const auto link = t.face_link[s][static_cast<std::size_t>(f)];
+  const NodeRef p = n.parent();
+  if (link.sibling >= 0) {
+    Across a{false, p.child(link.sibling), link.sibling_face, {-1, -1, -1, -1}};
+    const auto s2 = static_cast<std::size_t>(link.sibling);
+    for (std::size_t k = 0; k < 4; ++k) {
+      if (static_cast<int>(k) == f) continue;
+      const int code = pair_code(t.vertex[s][k][0], t.vertex[s][k][1]);
+      for (std::size_t k2 = 0; k2 < 4; ++k2)
+        if (pair_code(t.vertex[s2][k2][0], t.vertex[s2][k2][1]) == code) a.vmap[k] = static_cast<int>(k2);
+    }
+    return a;
+  }
+  const Across pa = across(h, p, link.parent_face);
+  if (pa.boundary) return pa;
+  if (pa.node.depth < p.depth || h.state(pa.node) != NodeState::Internal) return pa;  // a coarser leaf
+  // Same depth as the parent and refined: the child of pa.node holding our face.
+  std::array<int, 3> codes{};
+  std::array<std::size_t, 3> ks{};
+  int i = 0;
+  for (std::size_t k = 0; k < 4; ++k) {
+    if (static_cast<int>(k) == f) continue;
+    codes[static_cast<std::size_t>(i)] = pair_code(pa.vmap[t.vertex[s][k][0]], pa.vmap[t.vertex[s][k][1]]);
+    ks[static_cast<std::size_t>(i++)] = k;
+  }
+  int c = -1, cg = -1;
+  std::array<int, 3> local{};
+  if (!find_child_face(pa.face, codes, c, cg, local)) return {true, {}, -1, {}};  // non-conforming input
+  Across a{false, pa.node.child(c), cg, {-1, -1, -1, -1}};
+  for (std::size_t j = 0; j < 3; ++j) a.vmap[ks[j]] = local[j];
+  return a;
+}
+
+// Emits the parts of face `keys` (outward from our side) bordering erased material, where
+// node m (face g) lies across it at the same level; loc[i] is m's local index of keys[i].
+void emit_against(const TetHierarchy& h, const std::array<PointKey, 3>& keys, const std::array<int, 3>& loc,
+                  const NodeRef& m, int g, std::vector<SurfaceFace>& out) {
+  const NodeState st = h.state(m);
+  if (st == NodeState::Full) return;
+  if (st == NodeState::Erased) {
+    out.push_back(keys);
+    return;
+  }
+  bool exact = true;
+  const std::array<PointKey, 3> mid{midpoint(keys[0], keys[1], exact), midpoint(keys[1], keys[2], exact),
+                                    midpoint(keys[2], keys[0], exact)};
+  // Sub-face vertices: 0..2 = corners, 3 + e = midpoint of edge e (e: 0-1, 1-2, 2-0).
+  static constexpr int kSub[4][3] = {{0, 3, 5}, {3, 1, 4}, {5, 4, 2}, {3, 4, 5}};
+  auto code_of = [&](int v) {
+    if (v < 3) return pair_code(loc[static_cast<std::size_t>(v)], loc[static_cast<std::size_t>(v)]);
+    const int e = v - 3;
+    return pair_code(loc[static_cast<std::size_t>(e)], loc[static_cast<std::size_t>((e + 1) % 3)]);
+  };
+  auto key_of = [&](int v) -> const PointKey& {
+    return v < 3 ? keys[static_cast<std::size_t>(v)] : mid[static_cast<std::size_t>(v - 3)];
+  };
+  for (const auto& sub : kSub) {
+    const std::array<int, 3> codes{code_of(sub[0]), code_of(sub[1]), code_of(sub[2])};
+    int c = -1, cg = -1;
+    std::array<int, 3> local{};
+    if (!find_child_face(g, codes, c, cg, local)) continue;
+    emit_against(h, {key_of(sub[0]), key_of(sub[1]), key_of(sub[2])}, local, m.child(c), cg, out);
+  }
+}
+
+}  // namespace
+
+PointKey point_key(const TetHierarchy& hierarchy, std::size_t r, const BaryKey& key) noexcept {
+  const Tet& t = hierarchy.root_tet(r);
+  std::array<std::pair<std::int32_t, std::int32_t>, 4> p{};
+  int n = 0;
+  for (std::size_t i = 0; i < 4; ++i)
+    if (key[i] != 0) p[static_cast<std::size_t>(n++)] = {t[i], key[i]};
+  for (int i = 1; i < n; ++i)  // insertion sort of at most 4 pairs
+    for (int j = i; j > 0 && p[static_cast<std::size_t>(j - 1)] > p[static_cast<std::size_t>(j)]; --j)
+      std::swap(p[static_cast<std::size_t>(j - 1)], p[static_cast<std::size_t>(j)]);
+  PointKey k;
+  for (int i = 0; i < n; ++i) {
+    k.id[static_cast<std::size_t>(i)] = p[static_cast<std::size_t>(i)].first;
+    k.weight[static_cast<std::size_t>(i)] = p[static_cast<std::size_t>(i)].second;
+  }
+  return k;
+}
+
+Vec3 point_position(const PointKey& key, std::span<const Vec3> vertices_mm) noexcept {
+  Vec3 p = Vec3::Zero();
+  for (std::size_t i = 0; i < 4; ++i)
+    if (key.id[i] >= 0) p += static_cast<double>(key.weight[i]) * vertices_mm[static_cast<std::size_t>(key.id[i])];
+  return p / static_cast<double>(kBaryScale);
+}
+
+BoundarySurface::BoundarySurface(const TetHierarchy& hierarchy) { rebuild_all(hierarchy); }
+
+std::size_t BoundarySurface::face_count() const noexcept {
+  std::size_t n = 0;
+  for (const auto& f : m_faces) n += f.size();
+  return n;
+}
+
+void BoundarySurface::rebuild_all(const TetHierarchy& hierarchy) {
+  m_faces.assign(hierarchy.root_count(), {});
+  m_mark.assign(hierarchy.root_count(), 0);
+  m_rebuilt.clear();
+  for (std::size_t r = 0; r < hierarchy.root_count(); ++r) {
+    rebuild_root(hierarchy, r);
+    m_rebuilt.push_back(static_cast<std::uint32_t>(r));
+  }
+}
+
+void BoundarySurface::update(const TetHierarchy& hierarchy, std::span<const std::uint32_t> changed_roots) {
+  m_rebuilt.clear();
+  auto add = [&](std::uint32_t r) {
+    if (!m_mark[r]) {
+      m_mark[r] = 1;
+      m_rebuilt.push_back(r);
+    }
+  };
+  for (const std::uint32_t r : changed_roots) {
+    add(r);
+    for (int f = 0; f < 4; ++f) {
+      const auto nb = hierarchy.root_neighbor(r, f);
+      if (nb.root >= 0) add(static_cast<std::uint32_t>(nb.root));
+    }
+  }
+  for (const std::uint32_t r : m_rebuilt) {
+    rebuild_root(hierarchy, r);
+    m_mark[r] = 0;
+  }
+}
+
+void BoundarySurface::rebuild_root(const TetHierarchy& hierarchy, std::size_t r) {
+  auto& out = m_faces[r];
+  out.clear();
+  hierarchy.for_each_leaf(r, [&](const NodeRef& n, NodeState st) {
+    if (st != NodeState::Full) return;
+    NodeGeometry g;
+    bool have_geometry = false;
+    for (int f = 0; f < 4; ++f) {
+      const Across a = across(hierarchy, n, f);
+      const NodeState other = a.boundary ? NodeState::Erased : hierarchy.state(a.node);
+      if (other == NodeState::Full) continue;
+      if (!have_geometry) {
+        g = hierarchy.geometry(n);
+        have_geometry = true;
+      }
+      std::array<int, 3> order{kFaceVerts[f][0], kFaceVerts[f][1], kFaceVerts[f][2]};
+      if (g.flipped) std::swap(order[1], order[2]);
+      std::array<PointKey, 3> keys;
+      std::array<int, 3> loc{};
+      for (std::size_t i = 0; i < 3; ++i) {
+        keys[i] = point_key(hierarchy, r, g.vertex[static_cast<std::size_t>(order[i])]);
+        loc[i] = a.vmap[static_cast<std::size_t>(order[i])];
+      }
+      if (other == NodeState::Erased) {
+        out.push_back(keys);
+      } else {
+        emit_against(hierarchy, keys, loc, a.node, a.face, out);
+      }
+    }
+  });
+}
+
+geometry::TriangleMesh assemble_surface(std::span<const std::vector<SurfaceFace>> v_lists,
+                                        std::span<const Vec3> vertices_mm) {
+  std::unordered_map<PointKey, std::int32_t, KeyHash> index;
+  geometry::TriangleMesh mesh;
+  auto vertex = [&](const PointKey& k) {
+    const auto [it, inserted] = index.try_emplace(k, static_cast<std::int32_t>(mesh.vertices.size()));
+    if (inserted) mesh.vertices.push_back(point_position(k, vertices_mm));
+    return it->second;
+  };
+  for (const auto& list : v_lists)
+    for (const auto& f : list)
+      for (const auto& k : f) vertex(k);
+  auto& root_field = mesh.cell_fields["root"];
+  std::vector<std::int32_t> ring;
+  // Appends the vertices strictly inside edge (a, b) that are surface vertices, in order.
+  auto split = [&](auto&& self, const PointKey& a, const PointKey& b) -> void {
+    bool exact = true;
+    const PointKey m = midpoint(a, b, exact);
+    if (!exact) return;
+    const auto it = index.find(m);
+    if (it == index.end()) return;
+    self(self, a, m);
+    ring.push_back(it->second);
+    self(self, m, b);
+  };
+  for (std::size_t r = 0; r < v_lists.size(); ++r) {
+    for (const auto& f : v_lists[r]) {
+      ring.clear();
+      for (std::size_t e = 0; e < 3; ++e) {
+        ring.push_back(index.at(f[e]));
+        split(split, f[e], f[(e + 1) % 3]);
+      }
+      if (ring.size() == 3) {
+        mesh.triangles.push_back({ring[0], ring[1], ring[2]});
+        root_field.values.push_back(static_cast<double>(r));
+        continue;
+      }
+      // Fan from the face centroid (strictly inside, so no triangle degenerates).
+      const auto c = static_cast<std::int32_t>(mesh.vertices.size());
+      mesh.vertices.push_back((point_position(f[0], vertices_mm) + point_position(f[1], vertices_mm) +
+                               point_position(f[2], vertices_mm)) / 3.0);
+      for (std::size_t i = 0; i < ring.size(); ++i) {
+        mesh.triangles.push_back({ring[i], ring[(i + 1) % ring.size()], c});
+        root_field.values.push_back(static_cast<double>(r));
+      }
+    }
+  }
+  return mesh;
+}
+
+}  // namespace ido::drill

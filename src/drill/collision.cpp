@@ -1,0 +1,60 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "ido/drill/collision.h"
+
+#include <algorithm>
+
+namespace ido::drill {
+
+ContactModel collide(const TetHierarchy& hierarchy, const Tool& tool, const ToolPose& pose) noexcept {
+  ContactModel m;
+  m.position_mm = pose.position_mm;
+  const Mat3 rot = pose.orientation.normalized().toRotationMatrix();
+  const Vec3& c = pose.position_mm;
+  Vec3 dir = Vec3::Zero();
+  int inside = 0;
+  for (const Vec3& s : tool.burr_samples()) {
+    const Vec3 p = c + rot * s;
+    const Location loc = hierarchy.locate(p);
+    if (loc.inside_mesh && loc.state == NodeState::Full) {
+      ++inside;
+      dir -= rot * s;  // centre − sample
+    }
+  }
+  m.burr_samples_inside = inside;
+  const double r = tool.burr_radius();
+  double depth = 2.0 * r * inside / static_cast<double>(tool.burr_samples().size());
+  const auto shaft = tool.shaft_samples();
+  const int ring = tool.shaft_ring_size();
+  if (ring > 0) {
+    const double rs = tool.options().shaft_radius_mm;
+    int best_ring = 0;
+    for (std::size_t start = 0; start + static_cast<std::size_t>(ring) <= shaft.size(); start += static_cast<std::size_t>(ring)) {
+      int in_ring = 0;
+      for (std::size_t k = start; k < start + static_cast<std::size_t>(ring); ++k) {
+        const Vec3 p = c + rot * shaft[k];
+        const Location loc = hierarchy.locate(p);
+        if (loc.inside_mesh && loc.state == NodeState::Full) {
+          ++in_ring;
+          const Vec3 radial(shaft[k].x(), shaft[k].y(), 0.0);
+          dir -= rot * radial * (r / rs);  // same weight per sample as the burr's
+        }
+      }
+      best_ring = std::max(best_ring, in_ring);
+      m.shaft_samples_inside += in_ring;
+    }
+    depth = std::max(depth, 2.0 * rs * best_ring / static_cast<double>(ring));
+  }
+  if (m.burr_samples_inside + m.shaft_samples_inside == 0) return m;
+  m.in_contact = true;
+  m.depth_mm = depth;
+  const double n = dir.norm();
+  const double total = m.burr_samples_inside + m.shaft_samples_inside;
+  if (n > 1e-6 * r * total) {
+    m.normal = dir / n;
+  } else {
+    m.normal = rot * Vec3::UnitZ();  // buried: push back along the shaft
+  }
+  return m;
+}
+
+}  // namespace ido::drill

@@ -1,0 +1,173 @@
+// SPDX-License-Identifier: Apache-2.0
+// Hand-written: the project's burr erosion on the tetrahedral hierarchy.
+#include "ido/drill/erosion.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "ido/core/error.h"
+
+namespace ido::drill {
+namespace {
+
+// True when the sphere (c, r) cannot touch the tetrahedron x: outside the bounding sphere
+// of the vertices or entirely beyond one face plane.
+bool sphere_misses_tet(const std::array<Vec3, 4>& x, const Vec3& c, double r) {
+  const Vec3 centroid = 0.25 * (x[0] + x[1] + x[2] + x[3]);
+  double rad2 = 0.0;
+  for (const auto& v : x) rad2 = std::max(rad2, (v - centroid).squaredNorm());
+  const double reach = r + std::sqrt(rad2);
+  if ((c - centroid).squaredNorm() > reach * reach) return true;
+  static constexpr int kFace[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
+  for (int f = 0; f < 4; ++f) {
+    const Vec3& a = x[static_cast<std::size_t>(kFace[f][0])];
+    Vec3 n = (x[static_cast<std::size_t>(kFace[f][1])] - a).cross(x[static_cast<std::size_t>(kFace[f][2])] - a);
+    // Orient n away from the opposite vertex.
+    if (n.dot(x[static_cast<std::size_t>(f)] - a) > 0.0) n = -n;
+    const double len = n.norm();
+    if (len <= 0.0) continue;
+    if (n.dot(c - a) / len > r) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+Eroder::Eroder(const ErosionOptions& options) : m_options(options) {
+  if (options.max_depth < 0 || options.max_depth > kMaxDepth) {
+    throw InvalidInput("erosion: max depth must be between 0 and " + std::to_string(kMaxDepth));
+  }
+  if (!(options.min_size_mm >= 0.0)) throw InvalidInput("erosion: minimum size must not be negative");
+  m_unlimited = !(options.removal_rate_mm3_per_s > 0.0);
+}
+
+int Eroder::finest_level(const TetHierarchy& hierarchy, std::size_t r) const noexcept {
+  if (m_options.min_size_mm <= 0.0) return m_options.max_depth;
+  const double ratio = hierarchy.root_diameter(r) / m_options.min_size_mm;
+  if (ratio <= 1.0) return 0;
+  return std::min(kMaxDepth, static_cast<int>(std::ceil(std::log2(ratio) - 1e-12)));
+}
+
+void Eroder::clear_changed_roots() noexcept {
+  for (auto r : m_changed) m_is_changed[r] = 0;
+  m_changed.clear();
+}
+
+bool Eroder::pay(double cost) noexcept {
+  if (m_unlimited) return true;
+  if (cost > m_budget) return false;
+  m_budget -= cost;
+  return true;
+}
+
+// Returns false when the budget ran out (stop everything).
+bool Eroder::process(TetHierarchy& h, const NodeRef& node, const std::array<Vec3, 4>& x, int finest,
+                     ErosionStats& stats) {
+  const NodeState st = h.state(node);
+  if (st == NodeState::Erased) return true;
+  if (sphere_misses_tet(x, m_centre, m_radius)) return true;
+  const double r2 = m_radius * m_radius;
+  bool all_inside = true;
+  for (const auto& v : x) all_inside = all_inside && (v - m_centre).squaredNorm() <= r2;
+  auto mark = [&] {
+    if (!m_is_changed[node.root]) {
+      m_is_changed[node.root] = 1;
+      m_changed.push_back(node.root);
+    }
+  };
+  if (all_inside || node.depth >= finest) {
+    if (!all_inside) {
+      const Vec3 centroid = 0.25 * (x[0] + x[1] + x[2] + x[3]);
+      if ((centroid - m_centre).squaredNorm() > r2) return true;
+    }
+    double material = 0.0;
+    if (st == NodeState::Full) {
+      material = h.node_volume(node);
+    } else {
+      // Internal node entirely inside: its full descendants' volume.
+      std::array<NodeRef, 8 * (kMaxDepth + 1)> stack{};
+      int top = 0;
+      stack[static_cast<std::size_t>(top++)] = node;
+      while (top > 0) {
+        const NodeRef n = stack[static_cast<std::size_t>(--top)];
+        const NodeState s = h.state(n);
+        if (s == NodeState::Full) material += h.node_volume(n);
+        if (s == NodeState::Internal)
+          for (int c = 0; c < 8; ++c) stack[static_cast<std::size_t>(top++)] = n.child(c);
+      }
+    }
+    if (!pay(material * h.density(node.root))) {
+      stats.rate_limited = true;
+      return false;
+    }
+    h.erase(node);
+    stats.removed_volume_mm3 += material;
+    ++stats.nodes_removed;
+    mark();
+    return true;
+  }
+  // Partly covered, above the finest level: descend.
+  bool refined_here = false;
+  if (st == NodeState::Full) {
+    if (!h.refine(node)) return true;
+    refined_here = true;
+    ++stats.nodes_refined;
+  }
+  const TreeTable& t = TreeTable::get();
+  bool go_on = true;
+  for (int s = 0; s < 8 && go_on; ++s) {
+    std::array<Vec3, 4> c;
+    for (std::size_t k = 0; k < 4; ++k) {
+      const auto& e = t.vertex[static_cast<std::size_t>(s)][k];
+      c[k] = 0.5 * (x[e[0]] + x[e[1]]);
+    }
+    go_on = process(h, node.child(s), c, finest, stats);
+  }
+  if (h.state(node) == NodeState::Internal && h.coarsen(node)) {
+    if (refined_here) --stats.nodes_refined;  // nothing removed below: undo
+  } else if (refined_here) {
+    mark();
+  }
+  return go_on;
+}
+
+ErosionStats Eroder::erode(TetHierarchy& hierarchy, const Vec3& centre_mm, double radius_mm, double pressing_force_n,
+                           double dt_s) {
+  ErosionStats stats;
+  if (!(pressing_force_n >= m_options.force_threshold_n) || !(radius_mm > 0.0)) return stats;
+  if (!m_unlimited) {
+    const double rate = m_options.removal_rate_mm3_per_s;
+    m_budget = std::min(m_budget + rate * std::max(dt_s, 0.0), 0.1 * rate);
+  }
+  m_centre = centre_mm;
+  m_radius = radius_mm;
+  const std::size_t n = hierarchy.root_count();
+  if (m_stamp.size() != n) {
+    m_stamp.assign(n, 0);
+    m_is_changed.assign(n, 0);
+    m_changed.clear();
+  }
+  if (++m_epoch == 0) {
+    std::fill(m_stamp.begin(), m_stamp.end(), 0);
+    m_epoch = 1;
+  }
+  m_candidates.clear();
+  const geometry::Box3 box{centre_mm - Vec3::Constant(radius_mm), centre_mm + Vec3::Constant(radius_mm)};
+  hierarchy.root_hash().for_each_in_box(box, [&](std::int32_t r) {
+    auto& s = m_stamp[static_cast<std::size_t>(r)];
+    if (s == m_epoch) return;
+    s = m_epoch;
+    const auto& rb = hierarchy.root_box(static_cast<std::size_t>(r));
+    if ((rb.lo.array() > box.hi.array()).any() || (rb.hi.array() < box.lo.array()).any()) return;
+    m_candidates.push_back(static_cast<std::uint32_t>(r));
+  });
+  std::sort(m_candidates.begin(), m_candidates.end());
+  for (const std::uint32_t r : m_candidates) {
+    const NodeRef root{r, 0, 0};
+    if (!process(hierarchy, root, hierarchy.world_vertices(root), finest_level(hierarchy, r), stats)) break;
+  }
+  return stats;
+}
+
+}  // namespace ido::drill
