@@ -121,23 +121,32 @@ Volume<Out> gradient_impl(const Volume<float>& v, bool threaded, Out fill, Store
 
 }  // namespace
 
-Volume<float> gaussian_smooth(const Volume<float>& volume, double sigma_mm,
+Volume<float> gaussian_smooth(const Volume<float>& volume, const Vec3& sigma_mm_per_axis,
                               const GaussianOptions& options) {
-  if (!(sigma_mm >= 0.0) || !std::isfinite(sigma_mm))
-    throw InvalidInput("gaussian_smooth: sigma must be a finite number of mm >= 0, got " +
-                       std::to_string(sigma_mm));
+  for (int a = 0; a < 3; ++a)
+    if (!(sigma_mm_per_axis[a] >= 0.0) || !std::isfinite(sigma_mm_per_axis[a]))
+      throw InvalidInput("gaussian_smooth: sigma must be a finite number of mm >= 0, got " +
+                         std::to_string(sigma_mm_per_axis[a]));
   if (!(options.truncate_sigmas >= 1.0))
     throw InvalidInput("gaussian_smooth: truncate_sigmas must be >= 1");
-  if (sigma_mm == 0.0 || volume.empty()) return volume;
+  if (volume.empty()) return volume;
   Volume<float> cur = volume;
   for (int a = 0; a < 3; ++a) {
     if (volume.size(a) < 2) continue;
-    const double sigma_vox = sigma_mm / volume.spacing()[a];
+    const double sigma_vox = sigma_mm_per_axis[a] / volume.spacing()[a];
     if (sigma_vox < 1e-3) continue;  // kernel is a delta to float precision
     cur = convolve_axis(cur, a, gaussian_kernel(sigma_vox, options.truncate_sigmas),
                         options.threaded);
   }
   return cur;
+}
+
+Volume<float> gaussian_smooth(const Volume<float>& volume, double sigma_mm,
+                              const GaussianOptions& options) {
+  if (!(sigma_mm >= 0.0) || !std::isfinite(sigma_mm))
+    throw InvalidInput("gaussian_smooth: sigma must be a finite number of mm >= 0, got " +
+                       std::to_string(sigma_mm));
+  return gaussian_smooth(volume, Vec3::Constant(sigma_mm), options);
 }
 
 Volume<Vec3f> gradient(const Volume<float>& volume, bool threaded) {

@@ -27,6 +27,12 @@ struct GaussianOptions {
 [[nodiscard]] Volume<float> gaussian_smooth(const Volume<float>& volume, double sigma_mm,
                                             const GaussianOptions& options = {});
 
+/// Smooths with an axis-aligned Gaussian whose standard deviation along the volume's i, j, k
+/// axes is @p sigma_mm_per_axis (mm each); otherwise as above. A zero component skips that
+/// axis. @throws ido::InvalidInput if a component is negative or not finite.
+[[nodiscard]] Volume<float> gaussian_smooth(const Volume<float>& volume, const Vec3& sigma_mm_per_axis,
+                                            const GaussianOptions& options = {});
+
 /// The world-frame gradient (intensity units per mm) at every voxel: central differences
 /// along i, j, k (one-sided on the border) divided by the spacing, then mapped to world
 /// axes through the direction matrix (∇_world = (D·S)^{-T} ∇_index). Exact for a field
