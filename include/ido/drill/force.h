@@ -13,12 +13,17 @@ struct CouplingOptions {
   double stiffness_n_per_mm = 1.5;   ///< coupling spring (N/mm)
   double time_constant_s = 0.004;    ///< first-order filter of the proxy offset (s); 0 = none
   double max_force_n = 10.0;         ///< output clamp (N)
+  double model_validity_mm = 2.0;    ///< extrapolate a contact model at most this far (mm)
 };
 
 /// Penetration of the device position @p device_mm extrapolated from @p model (mm, ≥ 0):
-/// depth_mm − normal · (device − position_mm), clamped at 0.
-[[nodiscard]] inline double extrapolated_depth(const ContactModel& model, const Vec3& device_mm) noexcept {
+/// depth_mm − normal · (device − position_mm), clamped at 0. A half-space model only holds
+/// near where it was made: farther than @p validity_mm from position_mm it gives 0 (the
+/// device jumped; the next collision update brings a fresh model).
+[[nodiscard]] inline double extrapolated_depth(const ContactModel& model, const Vec3& device_mm,
+                                               double validity_mm = 1e300) noexcept {
   if (!model.in_contact) return 0.0;
+  if ((device_mm - model.position_mm).squaredNorm() > validity_mm * validity_mm) return 0.0;
   return std::max(0.0, model.depth_mm - model.normal.dot(device_mm - model.position_mm));
 }
 

@@ -1,0 +1,135 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <thread>
+#include <vector>
+
+#include "ido/drill/boundary_surface.h"
+#include "ido/drill/collision.h"
+#include "ido/drill/erosion.h"
+#include "ido/drill/force.h"
+#include "ido/drill/haptic_device.h"
+#include "ido/drill/lock_free.h"
+#include "ido/drill/tet_hierarchy.h"
+#include "ido/drill/tool.h"
+#include "ido/geometry/triangle_mesh.h"
+
+namespace ido::drill {
+
+/// Settings of a drilling session.
+struct SimulatorOptions {
+  ToolOptions tool;
+  CouplingOptions coupling;
+  ErosionOptions erosion;
+  double haptic_period_s = 0.001;      ///< fixed haptic period (s); ≤ 0.001 for ≥ 1 kHz
+  double max_substep_mm = 0.0;         ///< erosion sub-steps along the motion; 0 = burr radius / 4
+  std::size_t max_haptic_ticks = 1U << 20;  ///< timing samples kept (preallocated)
+  double render_period_s = 1.0 / 60.0;  ///< render consumer polling period (s)
+};
+
+/// Order statistics of a series (same unit as the series).
+struct Percentiles {
+  double p50 = 0.0, p99 = 0.0, p999 = 0.0, max = 0.0;
+  std::size_t count = 0;
+};
+/// Percentiles of @p values (nearest rank).
+[[nodiscard]] Percentiles percentiles(std::vector<double> values);
+
+/// What a session measured.
+struct SessionStats {
+  std::vector<double> update_time_s;        ///< collision thread: collide + erode + v_lists, per update
+  std::vector<double> haptic_period_s;      ///< time between consecutive haptic tick starts
+  std::vector<double> force_compute_time_s; ///< read pose → force written, per tick
+  std::size_t haptic_ticks = 0;
+  std::size_t missed_deadlines = 0;         ///< ticks finishing after their period ended
+  std::size_t collision_updates = 0;
+  std::size_t render_snapshots = 0;          ///< snapshots consumed by the render thread
+  double removed_volume_mm3 = 0.0;
+  double peak_force_n = 0.0;
+  double mean_force_n = 0.0;                  ///< over ticks in contact
+  std::size_t contact_ticks = 0;
+  double max_force_step_n = 0.0;             ///< largest change between consecutive ticks
+};
+
+/// A drilling session on three threads (Turini et al. 2007): a haptic thread at a fixed
+/// period reads the device, computes the force from the latest contact model through the
+/// virtual coupling (extrapolating between collision updates) and writes it back; a
+/// collision/erosion thread collides the tool, erodes, rebuilds changed v_lists and
+/// publishes a new contact model; a render consumer takes snapshots of changed v_lists.
+/// Hand-offs: pose and contact model through triple buffers, snapshots through an SPSC
+/// ring — no locks, allocation or exceptions on the haptic path.
+///
+/// The simulator borrows the hierarchy and the device; both must outlive it. While running,
+/// only the collision thread touches the hierarchy.
+class Simulator {
+ public:
+  /// @throws ido::InvalidInput for a non-positive haptic period or invalid tool / erosion
+  /// options.
+  Simulator(TetHierarchy& hierarchy, HapticDevice& device, const SimulatorOptions& options = {});
+  ~Simulator();
+  Simulator(const Simulator&) = delete;
+  Simulator& operator=(const Simulator&) = delete;
+
+  /// Starts the three threads.
+  void start();
+  /// Stops and joins them (idempotent).
+  void stop();
+  /// Starts, waits until the device reports finished (or @p timeout_s passes), stops.
+  void run(double timeout_s = 1e9);
+
+  /// Measurements (call after stop()).
+  [[nodiscard]] const SessionStats& stats() const noexcept { return m_stats; }
+  /// The authoritative boundary surface (call after stop()).
+  [[nodiscard]] const BoundarySurface& surface() const noexcept { return m_surface; }
+  /// The render consumer's copy of the v_lists (call after stop()).
+  [[nodiscard]] const std::vector<std::vector<SurfaceFace>>& render_v_lists() const noexcept { return m_render_lists; }
+  [[nodiscard]] const Tool& tool() const noexcept { return m_tool; }
+
+ private:
+  struct PoseSample {
+    std::uint64_t sequence = 0;
+    double t_s = 0.0;
+    ToolPose pose;
+    double force_n = 0.0;
+  };
+  struct Snapshot {
+    std::vector<std::uint32_t> roots;
+    std::vector<std::vector<SurfaceFace>> lists;
+  };
+
+  void haptic_loop();
+  void collision_loop();
+  void render_loop();
+  [[nodiscard]] double now_s() const noexcept;
+
+  TetHierarchy& m_hierarchy;
+  HapticDevice& m_device;
+  SimulatorOptions m_options;
+  Tool m_tool;
+  Eroder m_eroder;
+  BoundarySurface m_surface;
+  VirtualCoupling m_coupling;
+
+  TripleBuffer<PoseSample> m_pose_buffer;
+  TripleBuffer<ContactModel> m_contact_buffer;
+  SpscRing<std::unique_ptr<Snapshot>, 256> m_snapshots;
+  std::vector<std::uint32_t> m_pending;  // changed roots not yet sent (ring full)
+  std::vector<std::uint8_t> m_pending_mark;
+
+  std::vector<std::vector<SurfaceFace>> m_render_lists;
+  std::atomic<bool> m_stop{false};
+  std::atomic<bool> m_collision_done{false};
+  std::atomic<bool> m_finished{false};
+  std::atomic<bool> m_collision_exited{false};
+  bool m_running = false;
+  std::thread m_haptic, m_collision, m_render;
+  std::int64_t m_start_ns = 0;
+
+  SessionStats m_stats;
+  std::vector<double> m_tick_period, m_tick_compute, m_tick_force;
+};
+
+}  // namespace ido::drill

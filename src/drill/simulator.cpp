@@ -1,0 +1,233 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "ido/drill/simulator.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "ido/core/error.h"
+
+namespace ido::drill {
+
+Percentiles percentiles(std::vector<double> v) {
+  Percentiles p;
+  p.count = v.size();
+  if (v.empty()) return p;
+  std::sort(v.begin(), v.end());
+  auto rank = [&](double q) {
+    const auto i = static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size()))) ;
+    return v[std::min(v.size() - 1, i == 0 ? 0 : i - 1)];
+  };
+  p.p50 = rank(0.5);
+  p.p99 = rank(0.99);
+  p.p999 = rank(0.999);
+  p.max = v.back();
+  return p;
+}
+
+Simulator::Simulator(TetHierarchy& hierarchy, HapticDevice& device, const SimulatorOptions& options)
+    : m_hierarchy(hierarchy),
+      m_device(device),
+      m_options(options),
+      m_tool(options.tool),
+      m_eroder(options.erosion),
+      m_surface(hierarchy),
+      m_coupling(options.coupling) {
+  if (!(options.haptic_period_s > 0.0) || !std::isfinite(options.haptic_period_s)) {
+    throw InvalidInput("simulator: haptic period must be positive");
+  }
+  m_render_lists = m_surface.v_lists();
+  m_pending_mark.assign(hierarchy.root_count(), 0);
+  m_tick_period.assign(options.max_haptic_ticks, 0.0);
+  m_tick_compute.assign(options.max_haptic_ticks, 0.0);
+  m_tick_force.assign(options.max_haptic_ticks, 0.0);
+}
+
+Simulator::~Simulator() { stop(); }
+
+double Simulator::now_s() const noexcept {
+  const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count();
+  return static_cast<double>(ns - m_start_ns) * 1e-9;
+}
+
+void Simulator::start() {
+  if (m_running) return;
+  m_stop.store(false);
+  m_collision_done.store(false);
+  m_finished.store(false);
+  m_collision_exited.store(false);
+  m_stats = {};
+  m_start_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count();
+  // Initial pose and contact model before the threads run.
+  if (m_device.has_pose()) {
+    PoseSample first;
+    first.pose = m_device.read_pose(0.0);
+    m_contact_buffer.write(collide(m_hierarchy, m_tool, first.pose));
+  }
+  m_running = true;
+  m_collision = std::thread([this] { collision_loop(); });
+  m_render = std::thread([this] { render_loop(); });
+  m_haptic = std::thread([this] { haptic_loop(); });
+}
+
+void Simulator::stop() {
+  if (!m_running) return;
+  m_stop.store(true);
+  m_haptic.join();
+  m_collision.join();
+  m_render.join();
+  m_running = false;
+  const std::size_t n = std::min(m_stats.haptic_ticks, m_tick_period.size());
+  m_stats.haptic_period_s.assign(m_tick_period.begin() + (n > 0 ? 1 : 0), m_tick_period.begin() + static_cast<std::ptrdiff_t>(n));
+  m_stats.force_compute_time_s.assign(m_tick_compute.begin(), m_tick_compute.begin() + static_cast<std::ptrdiff_t>(n));
+  double sum = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double f = m_tick_force[i];
+    m_stats.peak_force_n = std::max(m_stats.peak_force_n, f);
+    if (f > 0.0) {
+      sum += f;
+      ++m_stats.contact_ticks;
+    }
+    if (i > 0) m_stats.max_force_step_n = std::max(m_stats.max_force_step_n, std::abs(f - m_tick_force[i - 1]));
+  }
+  m_stats.mean_force_n = m_stats.contact_ticks > 0 ? sum / static_cast<double>(m_stats.contact_ticks) : 0.0;
+}
+
+void Simulator::run(double timeout_s) {
+  start();
+  const auto t0 = std::chrono::steady_clock::now();
+  while (!m_finished.load(std::memory_order_acquire)) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > timeout_s) break;
+  }
+  // Let the collision thread process the final pose before stopping.
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  stop();
+}
+
+void Simulator::haptic_loop() {
+  using clock = std::chrono::steady_clock;
+  const auto period = std::chrono::nanoseconds(static_cast<std::int64_t>(m_options.haptic_period_s * 1e9));
+  auto next = clock::now();
+  double prev_start = -1.0;
+  std::uint64_t seq = 0;
+  std::size_t tick = 0;
+  while (!m_stop.load(std::memory_order_relaxed)) {
+    const double t0 = now_s();
+    const ToolPose pose = m_device.read_pose(t0);
+    const bool live = m_device.has_pose();
+    const ContactModel& model = m_contact_buffer.read();
+    const Vec3 f = live ? m_coupling.update(model, pose.position_mm, m_options.haptic_period_s) : Vec3(Vec3::Zero());
+    m_device.write_force(f, t0);
+    PoseSample s;
+    s.sequence = ++seq;
+    s.t_s = t0;
+    s.pose = pose;
+    // Pressing force: the component pushing the tool back out of the material.
+    s.force_n = model.in_contact ? std::max(0.0, f.dot(model.normal)) : 0.0;
+    if (live) m_pose_buffer.write(s);
+    const double t1 = now_s();
+    if (tick < m_tick_period.size()) {
+      m_tick_period[tick] = prev_start < 0.0 ? 0.0 : t0 - prev_start;
+      m_tick_compute[tick] = t1 - t0;
+      m_tick_force[tick] = f.norm();
+    }
+    ++tick;
+    m_stats.haptic_ticks = tick;
+    prev_start = t0;
+    next += period;
+    if (clock::now() > next) {
+      ++m_stats.missed_deadlines;
+      // Resynchronise after an overrun instead of bursting to catch up.
+      next = clock::now();
+    }
+    if (m_device.finished(t0) && m_collision_done.load(std::memory_order_acquire)) {
+      m_finished.store(true, std::memory_order_release);
+    }
+    std::this_thread::sleep_until(next);
+  }
+}
+
+void Simulator::collision_loop() {
+  std::uint64_t last_seq = 0;
+  bool have_last = false;
+  Vec3 last_centre = Vec3::Zero();
+  double last_t = 0.0;
+  const double r = m_tool.burr_radius();
+  const double substep = m_options.max_substep_mm > 0.0 ? m_options.max_substep_mm : 0.25 * r;
+  while (!m_stop.load(std::memory_order_relaxed)) {
+    if (!m_pose_buffer.has_new()) {
+      std::this_thread::sleep_for(std::chrono::microseconds(200));
+      continue;
+    }
+    const PoseSample s = m_pose_buffer.read();
+    if (s.sequence == last_seq) continue;
+    last_seq = s.sequence;
+    const double t0 = now_s();
+    const Vec3 c = s.pose.position_mm;
+    const double dt = have_last ? std::max(0.0, s.t_s - last_t) : 0.0;
+    const Vec3 from = have_last ? last_centre : c;
+    const int n = std::max(1, static_cast<int>(std::ceil((c - from).norm() / substep)));
+    for (int i = 1; i <= n; ++i) {
+      const Vec3 p = from + (c - from) * (static_cast<double>(i) / n);
+      m_stats.removed_volume_mm3 += m_eroder.erode(m_hierarchy, p, r, s.force_n, dt / n).removed_volume_mm3;
+    }
+    have_last = true;
+    last_centre = c;
+    last_t = s.t_s;
+    m_contact_buffer.write(collide(m_hierarchy, m_tool, s.pose));
+    // Changed v_lists: rebuild and hand a snapshot to the render consumer.
+    if (!m_eroder.changed_roots().empty()) {
+      m_surface.update(m_hierarchy, m_eroder.changed_roots());
+      m_eroder.clear_changed_roots();
+      for (const std::uint32_t root : m_surface.last_rebuilt()) {
+        if (!m_pending_mark[root]) {
+          m_pending_mark[root] = 1;
+          m_pending.push_back(root);
+        }
+      }
+    }
+    const double t1 = now_s();
+    m_stats.update_time_s.push_back(t1 - t0);
+    ++m_stats.collision_updates;
+    if (!m_pending.empty()) {
+      auto snap = std::make_unique<Snapshot>();
+      snap->roots = m_pending;
+      for (const std::uint32_t root : m_pending) snap->lists.push_back(m_surface.v_list(root));
+      if (m_snapshots.push(snap)) {
+        for (const std::uint32_t root : m_pending) m_pending_mark[root] = 0;
+        m_pending.clear();
+      }
+    }
+    if (m_device.finished(s.t_s)) m_collision_done.store(true, std::memory_order_release);
+  }
+  // Hand over what is still pending (the render consumer runs until we have exited).
+  while (!m_pending.empty()) {
+    auto snap = std::make_unique<Snapshot>();
+    snap->roots = m_pending;
+    for (const std::uint32_t root : m_pending) snap->lists.push_back(m_surface.v_list(root));
+    if (m_snapshots.push(snap)) {
+      for (const std::uint32_t root : m_pending) m_pending_mark[root] = 0;
+      m_pending.clear();
+    } else {
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+  }
+  m_collision_exited.store(true, std::memory_order_release);
+}
+
+void Simulator::render_loop() {
+  const auto period = std::chrono::nanoseconds(static_cast<std::int64_t>(m_options.render_period_s * 1e9));
+  for (;;) {
+    // Read the flag before draining: after it is seen set, one more drain gets everything.
+    const bool collision_exited = m_collision_exited.load(std::memory_order_acquire);
+    while (auto snap = m_snapshots.pop()) {
+      for (std::size_t i = 0; i < (*snap)->roots.size(); ++i) m_render_lists[(*snap)->roots[i]] = std::move((*snap)->lists[i]);
+      ++m_stats.render_snapshots;
+    }
+    if (collision_exited) break;
+    std::this_thread::sleep_for(period);
+  }
+}
+
+}  // namespace ido::drill

@@ -1,0 +1,201 @@
+// SPDX-License-Identifier: Apache-2.0
+// The threaded session, lock-free hand-offs and the UDP bridge (label: threads).
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include "ido/core/error.h"
+#include "ido/drill/haptic_device.h"
+#include "ido/drill/lock_free.h"
+#include "ido/drill/shapes.h"
+#include "ido/drill/simulator.h"
+#include "ido/drill/udp_bridge.h"
+#include "support/test_support.h"
+
+namespace ido::drill {
+namespace {
+
+TEST(LockFree, TripleBufferDeliversConsistentLatestValues) {
+  struct Pair { std::uint64_t a = 0, b = 0; };
+  TripleBuffer<Pair> buf;
+  std::atomic<bool> done{false};
+  std::thread writer([&] {
+    for (std::uint64_t i = 1; i <= 200000; ++i) buf.write({i, 2 * i});
+    done = true;
+  });
+  std::uint64_t last = 0;
+  bool torn = false, backwards = false;
+  while (!done.load()) {
+    const Pair p = buf.read();
+    torn = torn || p.b != 2 * p.a;
+    backwards = backwards || p.a < last;
+    last = p.a;
+  }
+  writer.join();
+  EXPECT_FALSE(torn);
+  EXPECT_FALSE(backwards);
+  EXPECT_EQ(buf.read().a, 200000U);
+}
+
+TEST(LockFree, SpscRingKeepsOrderAndLosesNothing) {
+  SpscRing<std::uint64_t, 64> ring;
+  std::thread producer([&] {
+    for (std::uint64_t i = 0; i < 20000; ++i) {
+      std::uint64_t v = i;
+      while (!ring.push(v)) std::this_thread::yield();
+    }
+  });
+  std::uint64_t expect = 0;
+  while (expect < 20000) {
+    if (auto v = ring.pop()) {
+      ASSERT_EQ(*v, expect);
+      ++expect;
+    } else {
+      std::this_thread::yield();
+    }
+  }
+  producer.join();
+  EXPECT_FALSE(ring.pop().has_value());
+}
+
+ScriptedTrajectory plunge(double duration_s) {
+  // Down onto the top face of a 12 mm block, 1.5 mm into it, then sideways.
+  std::vector<double> t{0.0, 0.3 * duration_s, 0.7 * duration_s, duration_s};
+  std::vector<ToolPose> p(4);
+  p[0].position_mm = Vec3(6, 6, 15);
+  p[1].position_mm = Vec3(6, 6, 12 + 2 - 1.5);
+  p[2].position_mm = Vec3(8, 6.5, 12 + 2 - 1.5);
+  p[3].position_mm = Vec3(8, 6.5, 15);
+  return ScriptedTrajectory(t, p);
+}
+
+TEST(Simulator, ScriptedSessionDrillsAndRenderCopyMatches) {
+  TetHierarchy h(make_block({12, 12, 12}, 3.0));
+  auto device = plunge(0.4);
+  SimulatorOptions o;
+  o.tool.burr_radius_mm = 2.0;
+  o.erosion = {.force_threshold_n = 0.05, .removal_rate_mm3_per_s = 0.0, .max_depth = 4};
+  const double before = h.material_volume();
+  Simulator sim(h, device, o);
+  sim.run(10.0);
+  const auto& st = sim.stats();
+  EXPECT_GT(st.haptic_ticks, 50U);  // no timing assertion: the machine may be loaded
+  EXPECT_GT(st.collision_updates, 10U);
+  EXPECT_GT(st.removed_volume_mm3, 1.0);
+  EXPECT_TRUE(test::rel_near(before - h.material_volume(), st.removed_volume_mm3, 1e-9));
+  EXPECT_GT(st.peak_force_n, 0.0);
+  ASSERT_FALSE(device.forces().empty());
+  // The render consumer's copy equals the authoritative v_lists.
+  const auto& mine = sim.render_v_lists();
+  const auto& truth = sim.surface().v_lists();
+  ASSERT_EQ(mine.size(), truth.size());
+  for (std::size_t r = 0; r < truth.size(); ++r) ASSERT_EQ(mine[r], truth[r]) << "root " << r;
+  EXPECT_GT(st.render_snapshots, 0U);
+  // Nothing outside the swept region went: material left ≥ block − (swept volume bound).
+  const double swept = 4.0 / 3.0 * kPi * 8 + kPi * 4 * (2.0 + 2.06 + 3.5);
+  EXPECT_LE(st.removed_volume_mm3, swept);
+}
+
+TEST(HapticDevice, CsvTrajectoryParsesAndInterpolates) {
+  const auto dir = test::scratch_dir("drill_csv");
+  {
+    std::ofstream f(dir / "path.csv");
+    f << "t,x,y,z\n0,0,0,0\n1,10,0,0\n2,10,10,0\n";
+  }
+  const auto traj = ScriptedTrajectory::load_csv(dir / "path.csv");
+  EXPECT_TRUE(test::near(traj.pose_at(0.5).position_mm.x(), 5.0, 1e-12));
+  EXPECT_TRUE(test::near(traj.pose_at(1.25).position_mm.y(), 2.5, 1e-12));
+  EXPECT_TRUE(test::near(traj.duration(), 2.0, 0));
+  {
+    std::ofstream f(dir / "bad.csv");
+    f << "0,0,0,0\n1,1,1\n";
+  }
+  try {
+    (void)ScriptedTrajectory::load_csv(dir / "bad.csv");
+    FAIL() << "expected IoError";
+  } catch (const IoError& e) {
+    EXPECT_EQ(e.location().line, 2);
+  }
+  {
+    std::ofstream f(dir / "back.csv");
+    f << "0,0,0,0\n0,1,1,1\n";
+  }
+  EXPECT_THROW((void)ScriptedTrajectory::load_csv(dir / "back.csv"), IoError);
+  EXPECT_THROW((void)ScriptedTrajectory::load_csv(dir / "missing.csv"), IoError);
+}
+
+TEST(UdpBridge, PacketsRoundTrip) {
+  PosePacket p;
+  p.sequence = 7;
+  p.flags = 1;
+  p.t_s = 1.25;
+  p.pose.position_mm = Vec3(1, -2, 3.5);
+  p.pose.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Vec3::UnitX()));
+  const auto bytes = encode_pose(p);
+  PosePacket q;
+  ASSERT_TRUE(decode_pose(bytes.data(), bytes.size(), q));
+  EXPECT_EQ(q.sequence, 7U);
+  EXPECT_EQ(q.flags, 1U);
+  EXPECT_TRUE(q.pose.position_mm.isApprox(p.pose.position_mm));
+  EXPECT_TRUE(q.pose.orientation.isApprox(p.pose.orientation));
+  EXPECT_FALSE(decode_pose(bytes.data(), bytes.size() - 1, q));
+  auto broken = bytes;
+  broken[0] = 'X';
+  EXPECT_FALSE(decode_pose(broken.data(), broken.size(), q));
+}
+
+TEST(UdpBridge, DrivesASessionOverLoopback) {
+  TetHierarchy h(make_block({12, 12, 12}, 3.0));
+  UdpBridge bridge({.port = 0, .idle_timeout_s = 1.0});
+  SimulatorOptions o;
+  o.tool.burr_radius_mm = 2.0;
+  o.erosion = {.force_threshold_n = 1e9, .removal_rate_mm3_per_s = 0.0, .max_depth = 3};  // touch only
+  Simulator sim(h, bridge, o);
+  sim.start();
+  const int sock = ::socket(AF_INET, SOCK_DGRAM, 0);
+  ASSERT_GE(sock, 0);
+  timeval tv{0, 20000};
+  ::setsockopt(sock, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof(tv));
+  sockaddr_in to{};
+  to.sin_family = AF_INET;
+  to.sin_port = htons(bridge.port());
+  to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  double max_fz = 0.0;
+  int forces = 0;
+  for (std::uint32_t i = 0; i < 150; ++i) {
+    PosePacket p;
+    p.sequence = i;
+    p.t_s = i * 0.002;
+    const double depth = std::min(1.0, i * 0.01);  // pressing 1 mm into the top face
+    p.pose.position_mm = Vec3(6, 6, 12 + 2 - depth);
+    p.flags = i == 149 ? 1U : 0U;
+    const auto bytes = encode_pose(p);
+    ::sendto(sock, bytes.data(), bytes.size(), 0, reinterpret_cast<const sockaddr*>(&to), sizeof(to));
+    std::array<std::uint8_t, 128> buf{};
+    const ssize_t n = ::recv(sock, buf.data(), buf.size(), 0);
+    ForcePacket f;
+    if (n > 0 && decode_force(buf.data(), static_cast<std::size_t>(n), f)) {
+      ++forces;
+      max_fz = std::max(max_fz, f.force_n.z());
+      EXPECT_LE(std::abs(f.force_n.x()), 0.1 * std::max(0.1, f.force_n.norm()));
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  ::close(sock);
+  sim.stop();
+  EXPECT_GT(forces, 50);
+  EXPECT_GT(max_fz, 0.5);  // pushed up, out of the face
+  EXPECT_EQ(bridge.rejected_packets(), 0U);
+  EXPECT_GE(bridge.received_packets(), 100U);
+}
+
+}  // namespace
+}  // namespace ido::drill
