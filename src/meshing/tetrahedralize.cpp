@@ -1,0 +1,568 @@
+// SPDX-License-Identifier: Apache-2.0
+// One-level isosurface stuffing (Labelle & Shewchuk 2007), written for ido from the paper.
+#include "ido/meshing/tetrahedralize.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <optional>
+#include <unordered_map>
+#include <vector>
+
+#include "ido/core/error.h"
+#include "ido/core/parallel.h"
+
+namespace ido::meshing {
+namespace {
+
+using Id = std::int32_t;
+using Coord = std::array<std::int64_t, 3>;  // doubled lattice coordinates
+
+/// Reads the field in world space: trilinear inside the grid, intersected with the box of
+/// the voxel centres outside it (so regions touching the border are closed there).
+class FieldReader {
+ public:
+  explicit FieldReader(const image::Volume<float>& field) : m_field(field) {}
+  [[nodiscard]] double operator()(const Vec3& world) const {
+    const Vec3 idx = m_field.world_to_index(world);
+    const double value = m_field.sample_index(idx, image::Boundary::Clamp);
+    // Signed distance (mm, approximate for skewed grids) to the box of voxel centres.
+    Vec3 q;
+    for (int a = 0; a < 3; ++a) {
+      const double hi = double(m_field.size(a) - 1);
+      q[a] = std::max(-idx[a], idx[a] - hi) * m_field.spacing()[a];
+    }
+    const double box = q.maxCoeff() <= 0.0 ? q.maxCoeff() : q.cwiseMax(0.0).norm();
+    return std::max(value, box);
+  }
+
+ private:
+  const image::Volume<float>& m_field;
+};
+
+/// The body-centred cubic lattice: black vertices at p0 + h·(i, j, k), red vertices at the
+/// cube centres p0 + h·(i + ½, j + ½, k + ½). Vertex ids: black first, then red. Edges are
+/// stored in slots owned by one end: a black vertex owns its +x, +y, +z black edges (slots
+/// 0–2); a red vertex owns its +x, +y, +z red edges (slots 0–2) and its 8 diagonal edges to
+/// the corners of its cube (slots 3–10, corner bits x | y << 1 | z << 2).
+struct Lattice {
+  Vec3 p0;
+  double h = 1;
+  std::int64_t nx = 0, ny = 0, nz = 0;  // cubes per axis
+  std::int64_t nb = 0, nr = 0;          // black and red vertex counts
+
+  [[nodiscard]] std::int64_t vertex_count() const { return nb + nr; }
+  [[nodiscard]] std::int64_t slot_count() const { return 3 * nb + 11 * nr; }
+  [[nodiscard]] Id black(std::int64_t i, std::int64_t j, std::int64_t k) const {
+    return Id(i + (nx + 1) * (j + (ny + 1) * k));
+  }
+  [[nodiscard]] Id red(std::int64_t i, std::int64_t j, std::int64_t k) const {
+    return Id(nb + i + nx * (j + ny * k));
+  }
+  [[nodiscard]] bool is_red(Id v) const { return v >= nb; }
+  [[nodiscard]] Coord coord(Id v) const {
+    if (v < nb) {
+      const std::int64_t i = v % (nx + 1), r = v / (nx + 1);
+      return {2 * i, 2 * (r % (ny + 1)), 2 * (r / (ny + 1))};
+    }
+    const std::int64_t w = v - nb;
+    const std::int64_t i = w % nx, r = w / nx;
+    return {2 * i + 1, 2 * (r % ny) + 1, 2 * (r / ny) + 1};
+  }
+  [[nodiscard]] Id at(const Coord& c) const {
+    if (c[0] & 1) return red(c[0] / 2, c[1] / 2, c[2] / 2);
+    return black(c[0] / 2, c[1] / 2, c[2] / 2);
+  }
+  [[nodiscard]] bool valid(const Coord& c) const {
+    const bool odd = c[0] & 1;
+    const std::int64_t lim[3] = {2 * nx, 2 * ny, 2 * nz};
+    for (int a = 0; a < 3; ++a) {
+      if (c[a] < 0 || c[a] > lim[a] || bool(c[a] & 1) != odd) return false;
+    }
+    return true;
+  }
+  [[nodiscard]] Vec3 position(Id v) const {
+    const Coord c = coord(v);
+    return p0 + 0.5 * h * Vec3(double(c[0]), double(c[1]), double(c[2]));
+  }
+  [[nodiscard]] std::int64_t slot_base(Id v) const {
+    return v < nb ? 3 * std::int64_t(v) : 3 * nb + 11 * (std::int64_t(v) - nb);
+  }
+  [[nodiscard]] int slot_count(Id v) const { return v < nb ? 3 : 11; }
+  /// The other end of slot s of vertex v, or nullopt when it falls outside the lattice.
+  [[nodiscard]] std::optional<Id> slot_target(Id v, int s) const {
+    Coord c = coord(v);
+    if (s < 3) {
+      c[s] += 2;
+    } else {
+      const int corner = s - 3;
+      for (int a = 0; a < 3; ++a) c[a] += ((corner >> a) & 1) ? 1 : -1;
+    }
+    if (!valid(c)) return std::nullopt;
+    return at(c);
+  }
+  /// Global slot index of the lattice edge (u, v), which must be a lattice edge.
+  [[nodiscard]] std::int64_t edge_slot(Id u, Id v) const {
+    const Coord cu = coord(u), cv = coord(v);
+    const bool ru = is_red(u), rv = is_red(v);
+    if (ru == rv) {  // axis-parallel edge, owned by the lower end
+      for (int a = 0; a < 3; ++a) {
+        if (cu[a] != cv[a]) return cu[a] < cv[a] ? slot_base(u) + a : slot_base(v) + a;
+      }
+    }
+    const Id r = ru ? u : v;
+    const Coord& cr = ru ? cu : cv;
+    const Coord& cb = ru ? cv : cu;
+    int corner = 0;
+    for (int a = 0; a < 3; ++a) corner |= (cb[a] > cr[a] ? 1 : 0) << a;
+    return slot_base(r) + 3 + corner;
+  }
+  /// True for the axis-parallel (black–black or red–red) edges of length h.
+  [[nodiscard]] bool is_long(Id u, Id v) const { return is_red(u) == is_red(v); }
+};
+
+/// Root of the field on the segment a → b where fa and fb have opposite signs, as the
+/// fraction t ∈ (0, 1) from a (Illinois variant of regula falsi on the trilinear field).
+double find_cut(const FieldReader& field, const Vec3& a, const Vec3& b, double fa, double fb) {
+  double t0 = 0, t1 = 1, f0 = fa, f1 = fb;
+  double t = f0 / (f0 - f1);
+  int side = 0;
+  for (int it = 0; it < 30; ++it) {
+    t = (t0 * f1 - t1 * f0) / (f1 - f0);
+    const double ft = field(a + t * (b - a));
+    if (ft == 0.0 || (t1 - t0) < 1e-9) break;
+    if ((ft < 0) == (f0 < 0)) {
+      t0 = t;
+      f0 = ft;
+      if (side == -1) f1 *= 0.5;
+      side = -1;
+    } else {
+      t1 = t;
+      f1 = ft;
+      if (side == 1) f0 *= 0.5;
+      side = 1;
+    }
+    if (std::abs(ft) < 1e-12) break;
+  }
+  return std::clamp(t, 1e-6, 1.0 - 1e-6);
+}
+
+constexpr std::size_t kBlock = 2048;
+
+struct Stuffer {
+  const Lattice& L;
+  const std::vector<std::int8_t>& sign;              // per lattice vertex: -1, 0, +1
+  const std::vector<Id>& cut_id;                     // per slot
+  const std::unordered_map<Id, Vec3>& warped;        // snapped lattice vertices
+  const std::vector<Vec3>& cut_pos;                  // per cut id
+  Id nv;                                             // lattice vertex count
+
+  [[nodiscard]] Vec3 node_position(Id n) const {
+    if (n >= nv) return cut_pos[std::size_t(n - nv)];
+    auto it = warped.find(n);
+    return it != warped.end() ? it->second : L.position(n);
+  }
+  [[nodiscard]] Id cut(Id u, Id v) const { return nv + cut_id[std::size_t(L.edge_slot(u, v))]; }
+
+  void emit(std::vector<Tet>& out, Id a, Id b, Id c, Id d) const {
+    const Vec3 pa = node_position(a);
+    const double vol =
+        (node_position(b) - pa).dot((node_position(c) - pa).cross(node_position(d) - pa));
+    if (vol > 0) out.push_back({a, b, c, d});
+    else if (vol < 0) out.push_back({a, b, d, c});
+    // a zero-volume tetrahedron cannot come out of the stencils; dropped defensively.
+  }
+
+  /// Quadrilateral on the lattice face (a, b, t) where a and b are negative and t positive:
+  /// returns true when the diagonal joins a to cut(b, t), false when it joins b to
+  /// cut(a, t). The rule depends only on the face, so both tetrahedra sharing it agree:
+  /// with a long edge through t, the diagonal joins the cut point on that long edge to the
+  /// opposite lattice vertex; with the long edge a–b, a parity rule on the apex's position
+  /// around the edge picks the end (adjacent apexes around an edge pick opposite ends, so
+  /// the two quadrilaterals of one tetrahedron never make an untetrahedralizable prism).
+  [[nodiscard]] bool diagonal_from_a(Id a, Id b, Id t) const {
+    if (L.is_long(a, t)) return false;  // cut(a,t) on the long edge → joins b
+    if (L.is_long(b, t)) return true;   // cut(b,t) on the long edge → joins a
+    const Coord ca = L.coord(a), cb = L.coord(b), ct = L.coord(t);
+    int axis = 0;
+    while (ca[axis] == cb[axis]) ++axis;
+    std::int64_t s = 0;
+    for (int k = 0; k < 3; ++k)
+      if (k != axis) s += ct[k] - ca[k];
+    const bool odd = s != 0;
+    const bool a_is_min = ca[axis] < cb[axis];
+    return odd == a_is_min;
+  }
+
+  /// Tetrahedralizes the prism with triangles (a0, a1, a2) and (b0, b1, b2), vertical edges
+  /// ai–bi; r[i] says quad i (between i and i+1) is split by ai–b(i+1), -1 = free.
+  void prism(std::vector<Tet>& out, const std::array<Id, 3>& a, const std::array<Id, 3>& b,
+             std::array<int, 3> r) const {
+    for (int i = 0; i < 3; ++i) {
+      if (r[i] >= 0) continue;
+      const int o1 = r[(i + 1) % 3], o2 = r[(i + 2) % 3];
+      if (o1 == 1 && o2 == 1) r[i] = 0;
+      else if (o1 == 0 && o2 == 0) r[i] = 1;
+      else {
+        // both choices valid: the shorter diagonal
+        const int j = (i + 1) % 3;
+        const double dr = (node_position(a[i]) - node_position(b[j])).squaredNorm();
+        const double dl = (node_position(a[j]) - node_position(b[i])).squaredNorm();
+        r[i] = dr <= dl ? 1 : 0;
+      }
+    }
+    for (int i = 0; i < 3; ++i) {
+      const int prev = (i + 2) % 3, n1 = (i + 1) % 3, n2 = (i + 2) % 3;
+      // quad n1 = (a[n1], a[n2], b[n2], b[n1]); R_n1 splits it by a[n1]–b[n2]
+      const std::array<Id, 4> q = {a[n1], a[n2], b[n2], b[n1]};
+      if (r[i] == 1 && r[prev] == 0) {  // a[i] carries two diagonals
+        emit(out, a[i], b[0], b[1], b[2]);
+        pyramid(out, a[i], q, r[n1] == 1);
+        return;
+      }
+      if (r[i] == 0 && r[prev] == 1) {  // b[i] carries two diagonals
+        emit(out, b[i], a[0], a[1], a[2]);
+        pyramid(out, b[i], q, r[n1] == 1);
+        return;
+      }
+    }
+  }
+
+  /// Pyramid with apex @p apex over quad q (cyclic); diag02 = split by q0–q2, else q1–q3.
+  void pyramid(std::vector<Tet>& out, Id apex, const std::array<Id, 4>& q, bool diag02) const {
+    if (diag02) {
+      emit(out, apex, q[0], q[1], q[2]);
+      emit(out, apex, q[0], q[2], q[3]);
+    } else {
+      emit(out, apex, q[0], q[1], q[3]);
+      emit(out, apex, q[1], q[2], q[3]);
+    }
+  }
+
+  /// Replaces the lattice tetrahedron v by its stencil.
+  void stencil(std::vector<Tet>& out, const std::array<Id, 4>& v) const {
+    std::array<Id, 4> neg{}, zer{}, pos{};
+    int nn = 0, nz = 0, np = 0;
+    for (Id x : v) {
+      const int s = sign[std::size_t(x)];
+      if (s < 0) neg[std::size_t(nn++)] = x;
+      else if (s > 0) pos[std::size_t(np++)] = x;
+      else zer[std::size_t(nz++)] = x;
+    }
+    if (np == 0) {
+      // A tetrahedron with four zero vertices lies along the surface and may be nearly
+      // flat (its vertices were warped independently): it is left out, which keeps every
+      // output tetrahedron within the proven dihedral bounds.
+      if (nn > 0) emit(out, v[0], v[1], v[2], v[3]);
+      return;
+    }
+    if (nn == 0) return;
+    if (nn == 1) {
+      const Id n = neg[0];
+      if (np == 3) emit(out, n, cut(n, pos[0]), cut(n, pos[1]), cut(n, pos[2]));
+      else if (np == 2) emit(out, n, zer[0], cut(n, pos[0]), cut(n, pos[1]));
+      else emit(out, n, zer[0], zer[1], cut(n, pos[0]));
+      return;
+    }
+    if (nn == 2 && np == 1) {
+      const Id a = neg[0], b = neg[1], t = pos[0];
+      // quad (a, b, cut(b,t), cut(a,t)); split a–cut(b,t) is q0–q2
+      pyramid(out, zer[0], {a, b, cut(b, t), cut(a, t)}, diagonal_from_a(a, b, t));
+      return;
+    }
+    if (nn == 2 && np == 2) {
+      const Id l = neg[0], r = neg[1], t = pos[0], m = pos[1];
+      // prism: bottom (l, cut(l,t), cut(l,m)), top (r, cut(r,t), cut(r,m))
+      const std::array<Id, 3> a = {l, cut(l, t), cut(l, m)};
+      const std::array<Id, 3> b = {r, cut(r, t), cut(r, m)};
+      // quad 0 = (l, cut(l,t), cut(r,t), r) on face (l, r, t): R = l–cut(r,t)
+      // quad 2 = (cut(l,m), l, r, cut(r,m)) on face (l, r, m): R = cut(l,m)–r
+      const int r0 = diagonal_from_a(l, r, t) ? 1 : 0;
+      const int r2 = diagonal_from_a(l, r, m) ? 0 : 1;
+      prism(out, a, b, {r0, -1, r2});
+      return;
+    }
+    // nn == 3, np == 1: prism between the negative face and its three cut points
+    const Id t = pos[0];
+    const std::array<Id, 3> a = {neg[0], neg[1], neg[2]};
+    const std::array<Id, 3> b = {cut(a[0], t), cut(a[1], t), cut(a[2], t)};
+    std::array<int, 3> r{};
+    for (int i = 0; i < 3; ++i) {
+      // quad i = (a_i, a_{i+1}, b_{i+1}, b_i) on face (a_i, a_{i+1}, t): R = a_i–cut(a_{i+1},t)
+      r[std::size_t(i)] = diagonal_from_a(a[std::size_t(i)], a[std::size_t((i + 1) % 3)], t) ? 1 : 0;
+    }
+    prism(out, a, b, r);
+  }
+};
+
+}  // namespace
+
+double stuffing_lattice_spacing(const image::Volume<float>& field,
+                                const TetrahedralizeOptions& options) {
+  if (!std::isfinite(options.edge_mm) || options.edge_mm < 0)
+    throw InvalidInput("tetrahedralize: edge_mm must be a finite length >= 0 (mm)");
+  if (options.edge_mm > 0) return options.edge_mm;
+  const Vec3& s = field.spacing();
+  return 2.0 * std::cbrt(s[0] * s[1] * s[2]);
+}
+
+geometry::TetMesh tetrahedralize(const image::Volume<float>& signed_distance_mm,
+                                 const TetrahedralizeOptions& options, Progress* progress) {
+  if (signed_distance_mm.empty())
+    throw InvalidInput("tetrahedralize: the signed distance field is empty");
+  for (int a = 0; a < 3; ++a) {
+    if (signed_distance_mm.size(a) < 2)
+      throw InvalidInput("tetrahedralize: the signed distance field needs at least 2 voxels "
+                         "along every axis");
+  }
+  if (options.graded)
+    throw InvalidInput("tetrahedralize: the graded (octree) lattice is not implemented; use "
+                       "graded = false");
+  const double h = stuffing_lattice_spacing(signed_distance_mm, options);
+
+  // Infinite values (e.g. from an empty mask) would make trilinear weights produce NaN.
+  const image::Volume<float>* field_volume = &signed_distance_mm;
+  image::Volume<float> clamped;
+  {
+    bool has_inf = false;
+    for (float x : signed_distance_mm.data()) {
+      if (std::isnan(x)) throw InvalidInput("tetrahedralize: the signed distance field holds NaN");
+      if (std::isinf(x)) has_inf = true;
+    }
+    if (has_inf) {
+      clamped = signed_distance_mm;
+      for (float& x : clamped.data()) x = std::clamp(x, -1e30f, 1e30f);
+      field_volume = &clamped;
+    }
+  }
+  const FieldReader field(*field_volume);
+
+  Lattice L;
+  {
+    const auto [lo, hi] = field_volume->world_bounds();
+    // half-voxel beyond the hull plus one lattice step keeps the lattice border outside.
+    const Vec3 margin = Vec3::Constant(h + 0.5 * field_volume->spacing().maxCoeff());
+    L.h = h;
+    L.p0 = lo - margin;
+    const Vec3 ext = (hi + margin) - L.p0;
+    const double n[3] = {std::ceil(ext[0] / h), std::ceil(ext[1] / h), std::ceil(ext[2] / h)};
+    const double total = (n[0] + 1) * (n[1] + 1) * (n[2] + 1) + n[0] * n[1] * n[2];
+    if (!(total < 2.0e9 / 11.0))
+      throw InvalidInput("tetrahedralize: edge_mm is too small for this field (lattice of " +
+                         std::to_string(total) + " vertices)");
+    L.nx = std::int64_t(n[0]);
+    L.ny = std::int64_t(n[1]);
+    L.nz = std::int64_t(n[2]);
+    L.nb = (L.nx + 1) * (L.ny + 1) * (L.nz + 1);
+    L.nr = L.nx * L.ny * L.nz;
+  }
+  const std::size_t nv = std::size_t(L.vertex_count());
+  const bool threaded = options.threaded;
+  const std::size_t nblocks = (nv + kBlock - 1) / kBlock;
+
+  // 1. field at the lattice vertices
+  report(progress, 0.0, "tetrahedralize: sampling the field");
+  std::vector<double> value(nv);
+  std::vector<std::int8_t> sign(nv);
+  parallel_for_ranges(
+      nv,
+      [&](std::size_t b, std::size_t e) {
+        for (std::size_t v = b; v < e; ++v) {
+          value[v] = field(L.position(Id(v)));
+          sign[v] = value[v] < 0 ? -1 : (value[v] > 0 ? 1 : 0);
+        }
+      },
+      threaded, 1024);
+  check_cancel(progress);
+
+  // 2. cut points on the edges whose ends have opposite signs
+  report(progress, 0.25, "tetrahedralize: cut points");
+  std::vector<Id> cut_id(std::size_t(L.slot_count()), -1);
+  std::vector<std::int64_t> block_cuts(nblocks + 1, 0);
+  parallel_for(
+      nblocks,
+      [&](std::size_t blk) {
+        std::int64_t count = 0;
+        const std::size_t end = std::min(nv, (blk + 1) * kBlock);
+        for (std::size_t v = blk * kBlock; v < end; ++v) {
+          if (sign[v] == 0) continue;
+          for (int s = 0; s < L.slot_count(Id(v)); ++s) {
+            const auto w = L.slot_target(Id(v), s);
+            if (w && sign[v] * sign[std::size_t(*w)] < 0) ++count;
+          }
+        }
+        block_cuts[blk + 1] = count;
+      },
+      threaded, 1);
+  for (std::size_t b = 0; b < nblocks; ++b) block_cuts[b + 1] += block_cuts[b];
+  const std::int64_t ncuts = block_cuts[nblocks];
+  if (ncuts >= std::int64_t(std::numeric_limits<Id>::max()) - std::int64_t(nv))
+    throw InvalidInput("tetrahedralize: too many cut points for 32-bit indices");
+  const auto ncut_size = static_cast<std::size_t>(ncuts);
+  std::vector<Vec3> cut_pos(ncut_size);
+  std::vector<double> cut_t(ncut_size);                // fraction from the slot owner
+  std::vector<std::array<Id, 2>> cut_ends(ncut_size);  // owner, other
+  parallel_for(
+      nblocks,
+      [&](std::size_t blk) {
+        std::int64_t id = block_cuts[blk];
+        const std::size_t end = std::min(nv, (blk + 1) * kBlock);
+        for (std::size_t v = blk * kBlock; v < end; ++v) {
+          if (sign[v] == 0) continue;
+          for (int s = 0; s < L.slot_count(Id(v)); ++s) {
+            const auto w = L.slot_target(Id(v), s);
+            if (!w || sign[v] * sign[std::size_t(*w)] >= 0) continue;
+            const Vec3 a = L.position(Id(v)), b = L.position(*w);
+            const double t = find_cut(field, a, b, value[v], value[std::size_t(*w)]);
+            cut_id[std::size_t(L.slot_base(Id(v)) + s)] = Id(id);
+            cut_pos[std::size_t(id)] = a + t * (b - a);
+            cut_t[std::size_t(id)] = t;
+            cut_ends[std::size_t(id)] = {Id(v), *w};
+            ++id;
+          }
+        }
+      },
+      threaded, 1);
+  check_cancel(progress);
+
+  // 3. warping: a vertex with a cut point closer than alpha × edge length on one of its
+  //    edges is snapped to the closest such cut point and becomes a zero vertex (the cut
+  //    points on its other edges disappear). Candidates in id order, checked again when
+  //    their turn comes, so the result does not depend on threading.
+  report(progress, 0.5, "tetrahedralize: warping");
+  std::vector<std::int64_t> violators;
+  {
+    std::vector<char> violated(nv, 0);
+    parallel_for(
+        std::size_t(ncuts),
+        [&](std::size_t c) {
+          const auto [u, w] = cut_ends[c];
+          const double alpha = L.is_long(u, w) ? kStuffingAlphaLong : kStuffingAlphaShort;
+          if (cut_t[c] < alpha) violated[std::size_t(u)] = 1;       // benign race: same value
+          if (1.0 - cut_t[c] < alpha) violated[std::size_t(w)] = 1;
+        },
+        false);
+    for (std::size_t v = 0; v < nv; ++v)
+      if (violated[v]) violators.push_back(std::int64_t(v));
+  }
+  std::unordered_map<Id, Vec3> warped;
+  warped.reserve(violators.size());
+  for (std::int64_t vv : violators) {
+    const Id v = Id(vv);
+    if (sign[std::size_t(v)] == 0) continue;
+    const Coord c = L.coord(v);
+    double best = INFINITY;
+    Vec3 best_pos;
+    auto consider = [&](const Coord& other) {
+      if (!L.valid(other)) return;
+      const Id w = L.at(other);
+      if (sign[std::size_t(v)] * sign[std::size_t(w)] >= 0) return;
+      const Id id = cut_id[std::size_t(L.edge_slot(v, w))];
+      const bool owner = cut_ends[std::size_t(id)][0] == v;
+      const double t = owner ? cut_t[std::size_t(id)] : 1.0 - cut_t[std::size_t(id)];
+      const bool is_long = L.is_long(v, w);
+      const double alpha = is_long ? kStuffingAlphaLong : kStuffingAlphaShort;
+      if (t >= alpha) return;
+      const double dist = t * (is_long ? 1.0 : std::sqrt(3.0) / 2.0);
+      if (dist < best) {
+        best = dist;
+        best_pos = cut_pos[std::size_t(id)];
+      }
+    };
+    for (int a = 0; a < 3; ++a) {
+      for (int d : {-2, 2}) {
+        Coord o = c;
+        o[std::size_t(a)] += d;
+        consider(o);
+      }
+    }
+    for (int corner = 0; corner < 8; ++corner) {
+      Coord o = c;
+      for (int a = 0; a < 3; ++a) o[std::size_t(a)] += ((corner >> a) & 1) ? 1 : -1;
+      consider(o);
+    }
+    if (best < INFINITY) {
+      sign[std::size_t(v)] = 0;
+      warped[v] = best_pos;
+    }
+  }
+  check_cancel(progress);
+
+  // 4. stencils, one lattice tetrahedron at a time: each pair of face-adjacent cubes
+  //    (a red edge) carries the 4 tetrahedra of that red edge and the black edges of the
+  //    shared face.
+  report(progress, 0.6, "tetrahedralize: stencils");
+  const Stuffer stuffer{L, sign, cut_id, warped, cut_pos, Id(nv)};
+  const std::size_t nred = std::size_t(L.nr);
+  const std::size_t rblocks = (nred + kBlock - 1) / kBlock;
+  std::vector<std::vector<Tet>> block_tets(rblocks);
+  parallel_for(
+      rblocks,
+      [&](std::size_t blk) {
+        auto& out = block_tets[blk];
+        const std::size_t end = std::min(nred, (blk + 1) * kBlock);
+        for (std::size_t w = blk * kBlock; w < end; ++w) {
+          const Id r = Id(L.nb + std::int64_t(w));
+          const Coord c = L.coord(r);
+          const std::int64_t ci[3] = {(c[0] - 1) / 2, (c[1] - 1) / 2, (c[2] - 1) / 2};
+          const std::int64_t lim[3] = {L.nx, L.ny, L.nz};
+          for (int a = 0; a < 3; ++a) {
+            if (ci[a] + 1 >= lim[a]) continue;
+            std::int64_t cn[3] = {ci[0], ci[1], ci[2]};
+            cn[a] += 1;
+            const Id r2 = L.red(cn[0], cn[1], cn[2]);
+            const int b1 = (a + 1) % 3, b2 = (a + 2) % 3;
+            auto corner = [&](int u, int v2) {
+              std::int64_t q[3] = {ci[0], ci[1], ci[2]};
+              q[a] += 1;
+              q[b1] += u;
+              q[b2] += v2;
+              return L.black(q[0], q[1], q[2]);
+            };
+            const Id q00 = corner(0, 0), q10 = corner(1, 0), q01 = corner(0, 1),
+                     q11 = corner(1, 1);
+            const std::array<std::array<Id, 2>, 4> blacks = {
+                {{q00, q10}, {q01, q11}, {q00, q01}, {q10, q11}}};
+            for (const auto& be : blacks) {
+              const std::array<Id, 4> tet = {r, r2, be[0], be[1]};
+              bool any_neg = false, any_pos = false;
+              for (Id x : tet) {
+                any_neg |= sign[std::size_t(x)] < 0;
+                any_pos |= sign[std::size_t(x)] > 0;
+              }
+              if (!any_neg && any_pos) continue;
+              stuffer.stencil(out, tet);
+            }
+          }
+        }
+      },
+      threaded, 1);
+  check_cancel(progress);
+
+  // 5. compact: keep the nodes the tetrahedra use, in node order
+  report(progress, 0.9, "tetrahedralize: output");
+  std::size_t ntets = 0;
+  for (const auto& b : block_tets) ntets += b.size();
+  const std::size_t nnodes = nv + std::size_t(ncuts);
+  std::vector<Id> remap(nnodes, -1);
+  for (const auto& b : block_tets)
+    for (const Tet& t : b)
+      for (Id x : t) remap[std::size_t(x)] = 0;
+  geometry::TetMesh mesh;
+  for (std::size_t n = 0; n < nnodes; ++n) {
+    if (remap[n] < 0) continue;
+    remap[n] = Id(mesh.vertices.size());
+    mesh.vertices.push_back(stuffer.node_position(Id(n)));
+  }
+  mesh.tets.reserve(ntets);
+  for (const auto& b : block_tets)
+    for (const Tet& t : b)
+      mesh.tets.push_back({remap[std::size_t(t[0])], remap[std::size_t(t[1])],
+                           remap[std::size_t(t[2])], remap[std::size_t(t[3])]});
+  report(progress, 1.0, "tetrahedralize: done");
+  return mesh;
+}
+
+}  // namespace ido::meshing
