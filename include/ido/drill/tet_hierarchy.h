@@ -182,8 +182,13 @@ class TetHierarchy {
   [[nodiscard]] std::size_t node_storage_bytes() const noexcept {
     return m_root_word.size() * sizeof(std::uint32_t) + m_blocks.size() * sizeof(Block);
   }
-  /// node_storage_bytes() / node_count().
+  /// Bytes per live node: (root words + blocks in use) / node_count() — 4 by construction.
   [[nodiscard]] double bytes_per_node() const noexcept {
+    return static_cast<double>(m_root_word.size() * sizeof(std::uint32_t) + m_live_blocks * sizeof(Block)) /
+           static_cast<double>(node_count());
+  }
+  /// node_storage_bytes() / node_count(): includes blocks waiting on the free list.
+  [[nodiscard]] double storage_bytes_per_node() const noexcept {
     return static_cast<double>(node_storage_bytes()) / static_cast<double>(node_count());
   }
   /// Child blocks in use / on the free list.
