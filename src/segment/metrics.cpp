@@ -12,6 +12,7 @@
 
 #include "ido/core/error.h"
 #include "ido/core/parallel.h"
+#include "ido/geometry/predicates.h"
 
 namespace ido::segment {
 namespace {
@@ -266,14 +267,15 @@ image::Volume<std::uint8_t> rasterize_mesh(const geometry::TriangleMesh& mesh, c
     }
   }
   // Side of the query point (py, pz) + (ε, ε²) w.r.t. the directed edge a→b in the (y, z)
-  // plane, ±1. The edge is evaluated in a canonical vertex order so the two triangles
+  // plane, ±1 (Simulation of Simplicity, Edelsbrunner & Mücke 1990, for the point only). The edge is evaluated in a canonical vertex order so the two triangles
   // sharing it get exactly opposite answers.
   auto side = [](const Vec3& a0, const Vec3& b0, double py, double pz) -> int {
     const bool swap = (b0.y() < a0.y()) || (b0.y() == a0.y() && b0.z() < a0.z());
     const Vec3& a = swap ? b0 : a0;
     const Vec3& b = swap ? a0 : b0;
     const double ey = b.y() - a.y(), ez = b.z() - a.z();
-    const double o = ey * (pz - a.z()) - ez * (py - a.y());
+    // Exact sign (adaptive predicate), so the triangles around a vertex partition the plane.
+    const double o = geometry::orient2d(Vec2(a.y(), a.z()), Vec2(b.y(), b.z()), Vec2(py, pz));
     int sgn = o > 0 ? 1 : o < 0 ? -1 : 0;
     if (sgn == 0) sgn = ez != 0 ? (ez < 0 ? 1 : -1) : (ey > 0 ? 1 : ey < 0 ? -1 : 0);
     return swap ? -sgn : sgn;

@@ -1,0 +1,89 @@
+// SPDX-License-Identifier: Apache-2.0
+// `ido compare --mask A --truth B [--json]` and `ido compare --mesh S --truth B`: Dice,
+// HD95, ASSD, volume ratio and components (definitions in docs/metrics.md). Presentation
+// only: the scores come from ido::segment.
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "command.h"
+#include "ido/core/error.h"
+#include "ido/io/mesh_io.h"
+#include "ido/io/volume_io.h"
+#include "ido/segment/metrics.h"
+
+namespace ido::cli {
+namespace {
+
+struct CompareOptions {
+  std::string mask;
+  std::string mesh;
+  std::string truth;
+  int label = -1;
+  bool json = false;
+};
+
+/// Reads a label volume: voxels equal to @p label (or ≠ 0 when label < 0) are inside.
+image::Volume<std::uint8_t> read_mask(const std::string& path, int label) {
+  const auto v = io::read_volume(path);
+  auto m = v.like<std::uint8_t>(0);
+  for (std::size_t n = 0; n < v.data().size(); ++n)
+    m.data()[n] = label < 0 ? v.data()[n] != 0.f : v.data()[n] == float(label);
+  return m;
+}
+
+nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+
+void run(const CompareOptions& o) {
+  if (o.mask.empty() == o.mesh.empty()) throw InvalidInput("give exactly one of --mask and --mesh");
+  const auto truth = read_mask(o.truth, o.label);
+  const segment::SegmentationScores s =
+      o.mask.empty() ? segment::compare_mesh_to_mask(io::read_triangle_mesh(o.mesh), truth)
+                     : segment::compare_masks(read_mask(o.mask, o.label), truth);
+  if (o.json) {
+    const nlohmann::json j = {{"mask", o.mask.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.mask)},
+                              {"mesh", o.mesh.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.mesh)},
+                              {"truth", o.truth},
+                              {"dice", s.dice},
+                              {"hd95_mm", number(s.hd95_mm)},
+                              {"assd_mm", number(s.assd_mm)},
+                              {"hausdorff_mm", number(s.hd_mm)},
+                              {"volume_ratio", number(s.volume_ratio)},
+                              {"volume_mask_mm3", s.volume_mask_mm3},
+                              {"volume_truth_mm3", s.volume_truth_mm3},
+                              {"voxels_mask", s.voxels_mask},
+                              {"voxels_truth", s.voxels_truth},
+                              {"components_mask", s.components_mask},
+                              {"components_truth", s.components_truth},
+                              {"resampled_to_truth_grid", s.resampled}};
+    std::printf("%s\n", j.dump(2).c_str());
+    return;
+  }
+  std::printf("Dice            %.4f\n", s.dice);
+  std::printf("HD95            %.3f mm\n", s.hd95_mm);
+  std::printf("ASSD            %.3f mm\n", s.assd_mm);
+  std::printf("Hausdorff       %.3f mm\n", s.hd_mm);
+  std::printf("volume ratio    %.4f  (%.1f / %.1f mm^3)\n", s.volume_ratio, s.volume_mask_mm3, s.volume_truth_mm3);
+  std::printf("components      %d (%s), %d (truth)\n", s.components_mask, o.mask.empty() ? "mesh" : "mask",
+              s.components_truth);
+  if (s.resampled) std::printf("note: the mask was resampled onto the truth's grid (nearest neighbour)\n");
+}
+
+void setup(CLI::App& app, const GlobalOptions& /*g*/) {
+  auto* sub = app.add_subcommand("compare", "Score a segmentation (mask or closed mesh) against a truth mask");
+  auto opts = std::make_shared<CompareOptions>();
+  sub->add_option("--mask", opts->mask, "Segmentation mask volume (voxels != 0 inside)");
+  sub->add_option("--mesh", opts->mesh, "Closed surface (.stl, .ply, .obj, .vtp) to rasterise on the truth grid");
+  sub->add_option("--truth", opts->truth, "Ground-truth mask volume")->required();
+  sub->add_option("--label", opts->label, "Only voxels equal to this value are inside (both volumes)");
+  sub->add_flag("--json", opts->json, "Print the scores as JSON");
+  sub->callback([opts] { run(*opts); });
+}
+
+const bool kRegistered = register_command({"compare", 32, setup});
+
+}  // namespace
+}  // namespace ido::cli

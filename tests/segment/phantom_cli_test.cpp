@@ -1,0 +1,67 @@
+// SPDX-License-Identifier: Apache-2.0
+// `ido phantom` and `ido compare` end to end.
+#include <filesystem>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "ido/io/mesh_io.h"
+#include "ido/io/volume_io.h"
+#include "ido/meshing/marching_cubes.h"
+#include "ido/segment/phantom.h"
+#include "support/test_support.h"
+
+namespace ido::segment {
+
+TEST(PhantomCli, WritesVolumesAndSeedsThatMatchTheLibrary) {
+  const auto dir = test::scratch_dir("phantom_cli");
+  const auto ct = dir / "ct.nii.gz", labels = dir / "truth.nii.gz";
+  const auto r = test::run_tool("phantom torus -o " + ct.string() + " --labels " + labels.string() +
+                                " --noise 30 --blur 0.5 --spacing 0.9,1,1.3 --seed 4 --json-seeds");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["truth_euler_characteristic"], 0);
+  const Phantom ph = make_phantom(PhantomKind::Torus,
+                                  {.spacing_mm = {0.9, 1, 1.3}, .noise_hu = 30, .blur_voxels = 0.5, .seed = 4});
+  ASSERT_EQ(j["seeds"].size(), ph.seeds_mm.size());
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_DOUBLE_EQ(j["seeds"][0]["world_mm"][a].get<double>(), ph.seeds_mm[0][a]);
+    EXPECT_EQ(j["seeds"][0]["voxel"][a].get<std::int64_t>(), ph.seeds_voxel[0][a]);
+  }
+  const auto ct_read = io::read_volume(ct);
+  ASSERT_TRUE(ct_read.same_grid(ph.ct_hu));
+  EXPECT_EQ(ct_read.data(), ph.ct_hu.data());
+  const auto labels_read = io::read_volume(labels);
+  for (std::size_t n = 0; n < labels_read.data().size(); ++n)
+    ASSERT_EQ(labels_read.data()[n], float(ph.labels.data()[n]));
+}
+
+TEST(CompareCli, MaskAndMeshAgainstTruth) {
+  const auto dir = test::scratch_dir("compare_cli");
+  const auto ct = dir / "ct.nrrd", truth = dir / "truth.nrrd", surface = dir / "truth.stl";
+  ASSERT_EQ(test::run_tool("phantom y-bifurcation -o " + ct.string() + " --labels " + truth.string()).exit_code, 0);
+  auto r = test::run_tool("compare --mask " + truth.string() + " --truth " + truth.string() + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["dice"], 1.0);
+  EXPECT_EQ(j["hd95_mm"], 0.0);
+  // The label's marching-cubes surface rasterises back onto the label: Dice 1 again.
+  const Phantom ph = make_phantom(PhantomKind::YBifurcation, {});
+  io::write_triangle_mesh(surface, meshing::marching_cubes_mask(ph.labels));
+  r = test::run_tool("compare --mesh " + surface.string() + " --truth " + truth.string() + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["dice"], 1.0);
+  EXPECT_EQ(j["components_mask"], 1);
+  // Bad input: exit code 2 and a message naming the problem.
+  r = test::run_tool("compare --mask " + (dir / "missing.nii.gz").string() + " --truth " + truth.string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("missing.nii.gz"), std::string::npos);
+  r = test::run_tool("phantom banana -o " + (dir / "x.nii.gz").string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("banana"), std::string::npos);
+  r = test::run_tool("compare --truth " + truth.string());
+  EXPECT_EQ(r.exit_code, 2);
+}
+
+}  // namespace ido::segment
