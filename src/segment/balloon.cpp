@@ -87,6 +87,7 @@ image::Volume<std::uint8_t> surface_to_mask(const geometry::TriangleMesh& surfac
 struct Balloon::State {
   BalloonOptions opt;
   image::Volume<float> smoothed;
+  image::Volume<float> gradient_mm;  // |∇ smoothed| (intensity per mm), for the edge stop
   IntensityModel model;
   double h = 1.0;  // smallest spacing (mm)
   sim::Particles particles;
@@ -124,7 +125,7 @@ struct Balloon::State {
       return false;
     const Vec3 idx = smoothed.world_to_index(p);
     for (int a = 0; a < 3; ++a)
-      if (!(idx[a] >= 0.0 && idx[a] <= double(smoothed.size(a) - 1))) return false;
+      if (!(idx[a] >= -0.5 && idx[a] <= double(smoothed.size(a)) - 0.5)) return false;
     return true;
   }
   void remesh() {
@@ -175,7 +176,61 @@ struct Balloon::State {
     const double step = opt.step_voxels * h;
     const double search = opt.edge_search_voxels * h;
     const double min_rise = 0.25 * model.tolerance / h;
-    const double sigma2 = std::pow(opt.smoothing_sigma_voxels * h, 2);
+    const double sigma2 = std::pow(opt.smoothing_sigma_voxels * h, 2) + std::pow(opt.scanner_blur_voxels * h, 2);
+    const double edge_k = opt.edge_stop > 0 ? opt.edge_stop * model.tolerance / h : 0.0;
+    // Pass 1: the normal displacement each vertex asks for.
+    std::vector<double> normal_mm(n, 0.0);
+    std::vector<std::uint8_t> snapped(n, 0);
+    parallel_for(
+        n,
+        [&](std::size_t i) {
+          if (particles.fixed(i)) return;
+          const Vec3& nrm = d.normals[i];
+          if (!inside_roi(x[i])) {
+            normal_mm[i] = -step;
+            return;
+          }
+          const double I = smoothed.sample(x[i]);
+          if (edge_stage) {
+            const auto t = edge_offset_along_normal(smoothed, x[i], nrm, model, search, 0.1 * h, min_rise, h);
+            if (t) {
+              // Blur (the scanner's and our pre-smoothing) moves the half-way level of a curved
+              // wall inwards by about σ² H (H the mean curvature): add it back.
+              const double H = umbrella_mean_curvature(d.umbrella_mm[i], nrm, d.mean_edge2_mm2[i]);
+              normal_mm[i] = *t + sigma2 * std::clamp(H, -1.0 / h, 1.0 / h);
+              snapped[i] = 1;
+              return;
+            }
+            normal_mm[i] = step * opt.weights.inflation * inflation_speed(I, model);
+            return;
+          }
+          double sp = inflation_speed(I, model);
+          if (sp > 0 && edge_k > 0) {
+            const double g = gradient_mm.sample(x[i]) / edge_k;
+            sp /= 1.0 + g * g;
+          }
+          normal_mm[i] = step * opt.weights.inflation * sp;
+        },
+        opt.threaded, 512);
+    if (edge_stage && opt.edge_offset_smoothing > 0) {
+      // The wall found along each normal is noisy: average the offsets over the one-ring
+      // (a scalar field on the surface, so the surface itself does not shrink).
+      for (int pass = 0; pass < opt.edge_offset_smoothing; ++pass) {
+        std::vector<double> sum(n, 0.0);
+        std::vector<int> cnt(n, 0);
+        for (const Tri& t : triangles)
+          for (int k = 0; k < 3; ++k) {
+            const std::int32_t a = t[k], b = t[(k + 1) % 3];
+            if (!snapped[b]) continue;
+            sum[a] += normal_mm[b];
+            ++cnt[a];
+          }
+        for (std::size_t i = 0; i < n; ++i)
+          if (snapped[i]) normal_mm[i] = (normal_mm[i] + sum[i]) / double(1 + cnt[i]);
+      }
+    }
+    // Pass 2: displacement = normal request + curvature stiffness + tangential relaxation.
+    const double weight_c = edge_stage ? 0.1 * opt.weights.curvature : opt.weights.curvature;
     std::vector<Vec3> next(n);
     parallel_for(
         n,
@@ -185,28 +240,12 @@ struct Balloon::State {
             return;
           }
           const Vec3& nrm = d.normals[i];
-          const double H = umbrella_mean_curvature(d.umbrella_mm[i], nrm, d.mean_edge2_mm2[i]);
-          double normal_mm = 0;
-          const bool in_roi = inside_roi(x[i]);
-          const double I = smoothed.sample(x[i]);
-          if (!in_roi) {
-            normal_mm = -step;
-          } else if (edge_stage) {
-            const auto t = edge_offset_along_normal(smoothed, x[i], nrm, model, search, 0.1 * h, min_rise, h);
-            // Our own Gaussian pre-smoothing moves the half-way level of a curved wall
-            // inwards by about σ² H (σ the smoothing, H the mean curvature): add it back.
-            const double blur_shift = sigma2 * std::clamp(H, -1.0 / h, 1.0 / h);
-            normal_mm = t ? std::clamp(0.5 * (*t + blur_shift), -step, step)
-                          : step * opt.weights.inflation * inflation_speed(I, model);
-          } else {
-            normal_mm = step * opt.weights.inflation * inflation_speed(I, model);
-          }
+          const double along = snapped[i] ? std::clamp(0.5 * normal_mm[i], -step, step) : normal_mm[i];
           // Curvature stiffness as an umbrella step along the normal, coefficient capped
           // for explicit stability (the umbrella step is stable for coefficients ≤ 1).
-          const double weight_c = edge_stage ? 0.1 * opt.weights.curvature : opt.weights.curvature;
           double c = 2.0 * opt.step_voxels * weight_c * h * h / std::max(d.mean_edge2_mm2[i], 1e-12);
           c = std::min(c, 0.5);
-          Vec3 delta = nrm * normal_mm + c * nrm * nrm.dot(d.umbrella_mm[i]) +
+          Vec3 delta = nrm * along + c * nrm * nrm.dot(d.umbrella_mm[i]) +
                        opt.tangential_weight * tangential_umbrella(d.umbrella_mm[i], nrm);
           const double len = delta.norm();
           if (len > step) delta *= step / len;
@@ -247,6 +286,8 @@ Balloon::Balloon(const image::Volume<float>& ct, const std::vector<Vec3>& seeds_
   if (!options.reference || !options.tolerance) est = estimate_intensity_model(ct, seeds_mm, options.estimate);
   m->model.reference = options.reference ? *options.reference : est.reference;
   m->model.tolerance = options.tolerance ? *options.tolerance : est.tolerance;
+  m->model.accept_brighter = options.accept_brighter;
+  if (options.edge_stop > 0) m->gradient_mm = image::gradient_magnitude(m->smoothed, options.threaded);
   m->report.model = m->model;
   geometry::TriangleMesh all;
   const double r0 = options.seed_radius_voxels * ct.spacing().mean();

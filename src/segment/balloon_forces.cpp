@@ -43,7 +43,13 @@ std::optional<double> edge_offset_along_normal(const image::Volume<float>& smoot
   // maxima returns its middle.
   const int steps = static_cast<int>(std::ceil(search_mm / step_mm));
   const double w = window_mm > 0 ? window_mm : step_mm;
-  auto depart = [&](double t) { return std::abs(smoothed.sample(p + normal * t) - model.reference); };
+  // Profile value that rises outward across the wall: the departure from the reference,
+  // or, when brighter tissue also belongs to the organ (bone), minus the intensity, so the
+  // wall is the outer fall of intensity whatever lies between marrow and cortex.
+  auto depart = [&](double t) {
+    const double I = smoothed.sample(p + normal * t);
+    return model.accept_brighter ? -I : intensity_departure(I, model);
+  };
   double best = -INFINITY, first_t = 0, last_t = 0;
   for (int s = -steps; s <= steps; ++s) {
     const double t = s * step_mm;

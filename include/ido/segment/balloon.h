@@ -22,6 +22,13 @@ struct BalloonOptions {
   std::optional<double> reference;  ///< organ grey level; estimated at the seeds if unset
   std::optional<double> tolerance;  ///< accepted band half-width; estimated if unset
   IntensityEstimateOptions estimate;  ///< how to estimate what is unset
+  bool accept_brighter = false;       ///< see IntensityModel::accept_brighter (bone)
+  /// Edge stop (the "edge term" against leaks): inflation is scaled by
+  /// 1 / (1 + (|∇I| / k)²) with k = edge_stop × tolerance / h, the classic edge-stopping
+  /// function of geodesic active contours (Caselles, Kimmel & Sapiro, IJCV 1997), so the
+  /// steep partial-volume rim of a much brighter or darker neighbour across a thin gap holds
+  /// the surface. 0 disables it.
+  double edge_stop = 0.75;
   double seed_radius_voxels = 1.0;    ///< initial icosphere radius (≈ 2 voxels across)
   double smoothing_sigma_voxels = 0.7;  ///< Gaussian pre-smoothing of the image (× h)
   double edge_length_voxels = 1.0;      ///< target edge length of the surface (× h)
@@ -39,7 +46,11 @@ struct BalloonOptions {
   double convergence_rel_volume = 2e-3; ///< converged when |ΔV| / V over a window is below
   bool edge_refinement = true;          ///< final snap to the wall (edge attraction)
   int edge_iterations = 30;             ///< steps of the edge stage
-  double edge_search_voxels = 1.5;      ///< edge profile half-length (× h)
+  double edge_search_voxels = 2.0;      ///< edge profile half-length (× h)
+  int edge_offset_smoothing = 4;        ///< one-ring averaging passes of the wall offsets
+  /// Scanner blur (σ, × h) assumed when correcting the inward shift σ² H of the half-way
+  /// level of a blurred curved wall (σ² = pre-smoothing² + this²; H the mean curvature).
+  double scanner_blur_voxels = 0.7;
   bool threaded = true;                 ///< oneTBB for the per-vertex work
 };
 

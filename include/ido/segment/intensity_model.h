@@ -12,7 +12,18 @@ namespace ido::segment {
 struct IntensityModel {
   double reference = 0.0;  ///< organ grey level
   double tolerance = 1.0;  ///< half-width of the accepted band, > 0
+  /// When true, anything brighter than the reference also matches (the band is
+  /// [reference − tolerance, +∞)): for bone, whose cortex is far brighter than the marrow
+  /// where the seed lies. Default: the paper's symmetric band.
+  bool accept_brighter = false;
 };
+
+/// How far (intensity units) @p intensity departs from what @p model accepts as the organ:
+/// |I − reference|, or max(0, reference − I) when accept_brighter.
+[[nodiscard]] inline double intensity_departure(double intensity, const IntensityModel& model) noexcept {
+  const double d = intensity - model.reference;
+  return model.accept_brighter ? (d < 0 ? -d : 0.0) : (d < 0 ? -d : d);
+}
 
 /// Tunables of estimate_intensity_model().
 struct IntensityEstimateOptions {
@@ -31,12 +42,12 @@ struct IntensityEstimateOptions {
                                                       const std::vector<Vec3>& seeds_mm,
                                                       const IntensityEstimateOptions& options = {});
 
-/// The balloon's inflation speed for a vertex seeing @p intensity: 1 − |I − reference| /
-/// tolerance, clamped to [−1, 1]. Positive (inflate) inside the band, largest at the
+/// The balloon's inflation speed for a vertex seeing @p intensity: 1 − departure /
+/// tolerance (see intensity_departure), clamped to [−1, 1]. Positive (inflate) inside the band, largest at the
 /// reference, negative (deflate) beyond the tolerance on either side — the paper's force
 /// "inversely related to the grey-level difference" (Turini et al. 2007).
 [[nodiscard]] inline double inflation_speed(double intensity, const IntensityModel& model) noexcept {
-  const double s = 1.0 - std::abs(intensity - model.reference) / model.tolerance;
+  const double s = 1.0 - intensity_departure(intensity, model) / model.tolerance;
   return s > 1.0 ? 1.0 : (s < -1.0 ? -1.0 : s);
 }
 
