@@ -5,6 +5,8 @@
 #include <cmath>
 #include <string>
 
+#include <Eigen/Eigenvalues>
+
 #include "gather.h"
 #include "ido/core/error.h"
 #include "ido/core/parallel.h"
@@ -86,6 +88,21 @@ std::array<Vec3, 4> TetFemModel::gradients(std::size_t e) const {
   b[0] = -(b[1] + b[2] + b[3]);
   return b;
 }
+
+namespace {
+void project_definite(std::span<Mat3, 16> k) {
+  Eigen::Matrix<double, 12, 12> m;
+  for (int a = 0; a < 4; ++a)
+    for (int b = 0; b < 4; ++b) m.block<3, 3>(3 * a, 3 * b) = k[static_cast<std::size_t>(4 * a + b)];
+  m = 0.5 * (m + m.transpose()).eval();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 12, 12>> eig(m);
+  if (eig.eigenvalues().minCoeff() >= 0.0) return;
+  const Eigen::Matrix<double, 12, 1> lam = eig.eigenvalues().cwiseMax(0.0);
+  m = eig.eigenvectors() * lam.asDiagonal() * eig.eigenvectors().transpose();
+  for (int a = 0; a < 4; ++a)
+    for (int b = 0; b < 4; ++b) k[static_cast<std::size_t>(4 * a + b)] = m.block<3, 3>(3 * a, 3 * b);
+}
+}  // namespace
 
 void TetFemModel::update_state(const Particles&, bool) const {}
 
@@ -169,7 +186,9 @@ void TetFemModel::stiffness_blocks(const Particles& particles, std::span<Mat3> b
       m_tets.size(),
       [&](std::size_t e) {
         const Mat3 F = deformation_gradient(x, m_tets[e], m_dm_inv[e]);
-        element_stiffness(e, F, gradients(e), std::span<Mat3, 16>(blocks.data() + 16 * e, 16));
+        std::span<Mat3, 16> k(blocks.data() + 16 * e, 16);
+        element_stiffness(e, F, gradients(e), k);
+        if (m_definite) project_definite(k);
       },
       threaded, 256);
 }

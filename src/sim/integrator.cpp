@@ -282,7 +282,12 @@ void implicit_euler(World& world, double dt_s) {
     while (it < opts.cg_max_iterations) {
       a_times(d, q);
       const double dq = dot(d, q);
-      if (!(dq > 0.0)) break;  // not positive definite along d: stop with what we have
+      if (!(dq > 0.0)) {
+        // Not positive definite along d: keep the progress made; never re-apply a stale
+        // warm start.
+        if (it == 0) std::fill(dv.begin(), dv.end(), Vec3::Zero());
+        break;
+      }
       const double alpha = rz / dq;
       for (std::size_t i = 0; i < n; ++i) {
         dv[i] += alpha * d[i];

@@ -65,6 +65,12 @@ class TetFemModel : public ForceModel {
   [[nodiscard]] const std::vector<Tet>& tets() const noexcept { return m_tets; }
   [[nodiscard]] const Lame& lame() const noexcept { return m_lame; }
   [[nodiscard]] double rest_volume_mm3(std::size_t e) const { return m_volume[e]; }
+  /// When on, stiffness_blocks() returns each element's tangent projected onto the positive
+  /// semi-definite cone (negative eigenvalues of the 12×12 element matrix clamped to 0, as in
+  /// Teran, Sifakis, Irving & Fedkiw, SCA 2005), so implicit solves stay well posed for
+  /// energies whose Hessian is indefinite under compression. Off: the exact tangent.
+  void set_definite_stiffness(bool on) noexcept { m_definite = on; }
+  [[nodiscard]] bool definite_stiffness() const noexcept { return m_definite; }
 
  protected:
   /// Energy density Ψ(F) in N/mm² (= mJ/mm³) of element @p e.
@@ -87,6 +93,7 @@ class TetFemModel : public ForceModel {
   std::vector<Mat3> m_dm_inv;     ///< D_m⁻¹ per element, 1/mm
   std::vector<double> m_volume;   ///< rest volume per element, mm³
   Lame m_lame;
+  bool m_definite = false;
 
  private:
   std::vector<std::int32_t> m_offsets;   // gather: per particle, element corner slots

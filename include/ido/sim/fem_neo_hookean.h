@@ -10,10 +10,15 @@ namespace ido::sim {
 /// Ψ = ½ μ (I_C − 3) + ½ λ' (J − α)² − ½ λ' (1 − α)², λ' = λ + μ, α = 1 + μ/λ',
 /// so that it linearises to the given E, ν, has zero stress and energy at rest and stays
 /// finite and well defined for inverted elements (no log J).
-/// P = μ F + λ' (J − α) cof(F). Stiffness: exact tangent.
+/// P = μ F + λ' (J − α) cof(F). Stiffness: the exact tangent, projected to be positive
+/// semi-definite by default (set_definite_stiffness(false) gives the exact one).
 class NeoHookeanFem final : public TetFemModel {
  public:
-  using TetFemModel::TetFemModel;
+  NeoHookeanFem(std::vector<Tet> tets, std::span<const Vec3> rest_positions_mm,
+                const ElasticMaterial& material)
+      : TetFemModel(std::move(tets), rest_positions_mm, material) {
+    m_definite = true;
+  }
   [[nodiscard]] std::string_view kind() const override { return "neo_hookean_fem"; }
 
  protected:

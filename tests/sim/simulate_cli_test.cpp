@@ -1,0 +1,144 @@
+// SPDX-License-Identifier: Apache-2.0
+// `ido simulate` through the built tool: outputs, physics of a free fall, and every bad-scene
+// case of the issue (error names the JSON path, exit code 2).
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "support/test_support.h"
+
+namespace ido {
+namespace {
+
+using json = nlohmann::json;
+
+json free_fall_scene() {
+  return json::parse(R"({
+    "dt_s": 0.001, "steps": 100, "output_every": 25, "integrator": "symplectic_euler",
+    "gravity_mm_s2": [0, 0, -9806.65],
+    "bodies": [{
+      "name": "cube",
+      "mesh": {"generator": "cube", "edge_mm": 10, "cells": 2},
+      "model": "corotational_fem",
+      "material": {"youngs_modulus_pa": 1e3, "poisson_ratio": 0.3, "density_kg_m3": 1000}
+    }]})");
+}
+
+std::string write_scene(const std::string& dir, const json& scene) {
+  const auto path = test::scratch_dir(dir) / "scene.json";
+  std::ofstream(path) << scene.dump(2);
+  return path.string();
+}
+
+std::string read_text(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+TEST(SimulateCli, FreeFallWritesAllOutputsAndMatchesKinematics) {
+  const auto scene = write_scene("simulate_free_fall", free_fall_scene());
+  const auto out = test::scratch_dir("simulate_free_fall_out");
+  const auto r = test::run_tool("-q simulate " + scene + " -o " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (int f = 0; f <= 4; ++f) {
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%04d.vtu", f);
+    EXPECT_TRUE(std::filesystem::exists(out / name)) << name;
+  }
+  EXPECT_FALSE(std::filesystem::exists(out / "frame_0005.vtu"));
+  const auto pvd = read_text(out / "simulation.pvd");
+  EXPECT_NE(pvd.find("frame_0004.vtu"), std::string::npos);
+  const auto vtu = read_text(out / "frame_0004.vtu");
+  for (const char* field : {"displacement_mm", "velocity_mm_s", "green_strain", "cauchy_stress_pa", "von_mises_pa"})
+    EXPECT_NE(vtu.find(field), std::string::npos) << field;
+  const auto png = read_text(out / "energy.png");
+  ASSERT_GT(png.size(), 8u);
+  EXPECT_EQ(png.substr(1, 3), "PNG");
+  const auto report = json::parse(read_text(out / "report.json"));
+  EXPECT_EQ(report["steps"].get<int>(), 100);
+  EXPECT_EQ(report["frames"].get<int>(), 5);
+  EXPECT_GT(report["ms_per_step"]["p50"].get<double>(), 0.0);
+  // Free fall with symplectic Euler: v = g t exactly, so KE = ½ M (g t)² (mJ = 1e-3 kg mm²/s²),
+  // M = 1000 kg/m³ × 1000 mm³ = 1e-3 kg; no elastic energy.
+  const double t = 0.1, g = 9806.65, mass = 1e-3;
+  const double ke = 0.5 * mass * (g * t) * (g * t) * 1e-3;
+  EXPECT_TRUE(test::rel_near(report["final_energy_mj"]["kinetic"].get<double>(), ke, 1e-9));
+  EXPECT_TRUE(test::near(report["final_energy_mj"]["elastic"].get<double>(), 0.0, 1e-12));
+  // energy.csv: header + samples, last time = 0.1 s
+  const auto csv = read_text(out / "energy.csv");
+  EXPECT_EQ(csv.rfind("time_s,kinetic_mj,elastic_mj,gravitational_mj,total_mj", 0), 0u);
+  EXPECT_NE(csv.find("\n0.1,"), std::string::npos);
+}
+
+struct BadCase {
+  const char* name;
+  const char* patch;     // JSON merge patch applied to the good scene
+  const char* expected;  // substring of the message
+};
+
+class SimulateBadScene : public ::testing::TestWithParam<BadCase> {};
+
+TEST_P(SimulateBadScene, ExitsWithCode2AndNamesThePath) {
+  const auto c = GetParam();
+  json scene = free_fall_scene();
+  scene.merge_patch(json::parse(c.patch));
+  const auto path = write_scene(std::string("simulate_bad_") + c.name, scene);
+  const auto r = test::run_tool("simulate " + path + " -o " +
+                                (test::scratch_dir(std::string("simulate_bad_out_") + c.name)).string());
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("scene.json"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(c.expected), std::string::npos) << r.err;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Cases, SimulateBadScene,
+    ::testing::Values(
+        BadCase{"missing_dt", R"({"dt_s": null})", "/dt_s: missing"},
+        BadCase{"mistyped_steps", R"({"steps": "ten"})", "/steps: must be an integer"},
+        BadCase{"unknown_field", R"({"bodies": [{"name": "c", "mesh": {"generator": "cube", "edge_mm": 10, "cells": 2}, "model": "linear_fem", "material": {"youngs_modulus_pa": 1e5, "poison_ratio": 0.3, "density_kg_m3": 1000}}]})",
+                "/bodies/0/material/poison_ratio: unknown field"},
+        BadCase{"negative_stiffness", R"({"bodies": [{"mesh": {"generator": "cube", "edge_mm": 10, "cells": 2}, "model": "mass_spring", "mass_spring": {"stiffness_n_per_mm": -1}, "material": {"youngs_modulus_pa": 1e5, "poisson_ratio": 0.3, "density_kg_m3": 1000}}]})",
+                "/bodies/0/mass_spring/stiffness_n_per_mm: must be > 0"},
+        BadCase{"negative_young", R"({"bodies": [{"mesh": {"generator": "cube", "edge_mm": 10, "cells": 2}, "model": "linear_fem", "material": {"youngs_modulus_pa": -5, "poisson_ratio": 0.3, "density_kg_m3": 1000}}]})",
+                "/bodies/0/material/youngs_modulus_pa: must be > 0"},
+        BadCase{"poisson_half", R"({"bodies": [{"mesh": {"generator": "cube", "edge_mm": 10, "cells": 2}, "model": "linear_fem", "material": {"youngs_modulus_pa": 1e5, "poisson_ratio": 0.5, "density_kg_m3": 1000}}]})",
+                "/bodies/0/material/poisson_ratio: must be < 0.5"},
+        BadCase{"zero_dt", R"({"dt_s": 0})", "/dt_s: must be > 0"},
+        BadCase{"negative_dt", R"({"dt_s": -0.001})", "/dt_s: must be > 0"},
+        BadCase{"unknown_integrator", R"({"integrator": "leapfrog"})", "/integrator: unknown integrator 'leapfrog'"},
+        BadCase{"empty_fixed_box", R"({"bodies": [{"mesh": {"generator": "cube", "edge_mm": 10, "cells": 2}, "model": "linear_fem", "material": {"youngs_modulus_pa": 1e5, "poisson_ratio": 0.3, "density_kg_m3": 1000}, "fixed": [{"box_min_mm": [100, 100, 100], "box_max_mm": [101, 101, 101]}]}]})",
+                "/bodies/0/fixed/0: selects no vertex"},
+        BadCase{"unknown_model", R"({"bodies": [{"mesh": {"generator": "cube", "edge_mm": 10, "cells": 2}, "model": "rubber", "material": {"youngs_modulus_pa": 1e5, "poisson_ratio": 0.3, "density_kg_m3": 1000}}]})",
+                "/bodies/0/model: unknown model 'rubber'"}),
+    [](const auto& param_info) { return std::string(param_info.param.name); });
+
+TEST(SimulateCli, InvertedInitialMeshIsRejected) {
+  // A TetGen mesh whose only tetrahedron has negative volume.
+  const auto dir = test::scratch_dir("simulate_inverted");
+  std::ofstream(dir / "tet.node") << "4 3 0 0\n1 0 0 0\n2 10 0 0\n3 0 10 0\n4 0 0 10\n";
+  std::ofstream(dir / "tet.ele") << "1 4 0\n1 1 3 2 4\n";
+  json scene = free_fall_scene();
+  scene["bodies"][0]["mesh"] = {{"file", "tet.node"}};
+  std::ofstream(dir / "scene.json") << scene.dump(2);
+  const auto r = test::run_tool("simulate " + (dir / "scene.json").string() + " -o " + (dir / "out").string());
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("scene.json: /bodies/0/mesh"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("inverted"), std::string::npos) << r.err;
+}
+
+TEST(SimulateCli, MalformedJsonIsAnIoError) {
+  const auto dir = test::scratch_dir("simulate_malformed");
+  std::ofstream(dir / "scene.json") << "{\"dt_s\": 0.001, \"steps\": ";
+  const auto r = test::run_tool("simulate " + (dir / "scene.json").string() + " -o " + (dir / "out").string());
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("scene.json"), std::string::npos) << r.err;
+}
+
+}  // namespace
+}  // namespace ido
