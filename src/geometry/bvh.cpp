@@ -2,6 +2,8 @@
 #include "ido/geometry/bvh.h"
 
 #include <algorithm>
+#include <atomic>
+#include <cstdint>
 #include <numeric>
 
 #include "bvh_build.h"
@@ -13,52 +15,75 @@ namespace ido::geometry {
 
 namespace detail {
 
+namespace {
+
+/// Spreads the low 10 bits of x so that there are two zero bits between each.
+std::uint32_t spread_bits(std::uint32_t x) {
+  x &= 0x3ffu;
+  x = (x | (x << 16)) & 0x030000ffu;
+  x = (x | (x << 8)) & 0x0300f00fu;
+  x = (x | (x << 4)) & 0x030c30c3u;
+  x = (x | (x << 2)) & 0x09249249u;
+  return x;
+}
+
+}  // namespace
+
 BvhTree build_bvh(const std::vector<Aabb>& boxes, const std::vector<Vec3>& centroids,
                   int leaf_size) {
+  // Items are ordered along a Morton (Z-order) curve of their centroids, then the ordered
+  // range is halved recursively; boxes are filled bottom-up. O(n log n) for the sort, O(n)
+  // for the rest (the "linear BVH" idea of Lauterbach et al. 2009, simplified).
   BvhTree tree;
   const auto n = static_cast<std::int32_t>(boxes.size());
   if (n == 0) return tree;
   leaf_size = std::max(leaf_size, 1);
+  Aabb cbox;
+  for (const Vec3& c : centroids) cbox.extend(c);
+  const Vec3 lo = cbox.min;
+  const Vec3 ext = cbox.extent();
+  std::vector<std::uint64_t> keys(static_cast<std::size_t>(n));
+  for (std::int32_t i = 0; i < n; ++i) {
+    std::uint32_t code = 0;
+    for (int k = 0; k < 3; ++k) {
+      const double t = ext[k] > 0.0 ? (centroids[static_cast<std::size_t>(i)][k] - lo[k]) / ext[k] : 0.0;
+      const auto q = static_cast<std::uint32_t>(std::clamp(t * 1023.0, 0.0, 1023.0));
+      code |= spread_bits(q) << k;
+    }
+    keys[static_cast<std::size_t>(i)] = (static_cast<std::uint64_t>(code) << 32) | static_cast<std::uint32_t>(i);
+  }
+  std::sort(keys.begin(), keys.end());
   tree.order.resize(static_cast<std::size_t>(n));
-  std::iota(tree.order.begin(), tree.order.end(), 0);
+  for (std::size_t i = 0; i < keys.size(); ++i) tree.order[i] = static_cast<std::int32_t>(keys[i] & 0xffffffffu);
+
   tree.nodes.reserve(static_cast<std::size_t>(2 * n / leaf_size + 2));
   tree.nodes.push_back({});
-  struct Job {
-    std::int32_t node, begin, end;
-  };
-  std::vector<Job> stack{{0, 0, n}};
-  while (!stack.empty()) {
-    const Job job = stack.back();
-    stack.pop_back();
-    Aabb box;
-    Aabb cbox;
-    for (std::int32_t i = job.begin; i < job.end; ++i) {
-      const auto id = static_cast<std::size_t>(tree.order[static_cast<std::size_t>(i)]);
-      box.extend(boxes[id]);
-      cbox.extend(centroids[id]);
-    }
-    BvhNode& node = tree.nodes[static_cast<std::size_t>(job.node)];
-    node.box = box;
-    const std::int32_t count = job.end - job.begin;
-    if (count <= leaf_size) {
-      node.first = job.begin;
-      node.count = count;
+  std::vector<std::pair<std::int32_t, std::int32_t>> ranges{{0, n}};  // per node
+  for (std::size_t i = 0; i < tree.nodes.size(); ++i) {  // breadth-first creation
+    const auto [begin, end] = ranges[i];
+    if (end - begin <= leaf_size) {
+      tree.nodes[i].first = begin;
+      tree.nodes[i].count = end - begin;
       continue;
     }
-    const int axis = cbox.longest_axis();
-    const std::int32_t mid = job.begin + count / 2;
-    std::nth_element(tree.order.begin() + job.begin, tree.order.begin() + mid,
-                     tree.order.begin() + job.end, [&](std::int32_t a, std::int32_t b) {
-                       return centroids[static_cast<std::size_t>(a)][axis] <
-                              centroids[static_cast<std::size_t>(b)][axis];
-                     });
-    const auto left = static_cast<std::int32_t>(tree.nodes.size());
-    node.first = left;
-    node.count = 0;
+    const std::int32_t mid = begin + (end - begin) / 2;
+    tree.nodes[i].first = static_cast<std::int32_t>(tree.nodes.size());
+    tree.nodes[i].count = 0;
     tree.nodes.push_back({});
     tree.nodes.push_back({});
-    stack.push_back({left + 1, mid, job.end});
-    stack.push_back({left, job.begin, mid});
+    ranges.emplace_back(begin, mid);
+    ranges.emplace_back(mid, end);
+  }
+  for (std::size_t i = tree.nodes.size(); i-- > 0;) {  // children come after their parent
+    BvhNode& node = tree.nodes[i];
+    if (node.leaf()) {
+      for (std::int32_t s = node.first; s < node.first + node.count; ++s) {
+        node.box.extend(boxes[static_cast<std::size_t>(tree.order[static_cast<std::size_t>(s)])]);
+      }
+    } else {
+      node.box = tree.nodes[static_cast<std::size_t>(node.first)].box;
+      node.box.extend(tree.nodes[static_cast<std::size_t>(node.first + 1)].box);
+    }
   }
   return tree;
 }
@@ -171,6 +196,18 @@ std::vector<std::int32_t> TriangleBvh::overlapping(const Aabb& box) const {
 
 std::vector<std::pair<std::int32_t, std::int32_t>> TriangleBvh::self_pairs(
     const std::function<bool(std::int32_t, std::int32_t)>& accept, bool threaded) const {
+  return traverse_self(accept, threaded, false);
+}
+
+bool TriangleBvh::any_self_pair(const std::function<bool(std::int32_t, std::int32_t)>& accept,
+                                bool threaded) const {
+  return !traverse_self(accept, threaded, true).empty();
+}
+
+std::vector<std::pair<std::int32_t, std::int32_t>> TriangleBvh::traverse_self(
+    const std::function<bool(std::int32_t, std::int32_t)>& accept, bool threaded,
+    bool first_only) const {
+  std::atomic<bool> stop{false};
   using Pair = std::pair<std::int32_t, std::int32_t>;
   std::vector<Pair> result;
   if (m_nodes.empty()) return result;
@@ -183,7 +220,10 @@ std::vector<std::pair<std::int32_t, std::int32_t>> TriangleBvh::self_pairs(
     std::int32_t i = m_triangle_id[static_cast<std::size_t>(s)];
     std::int32_t j = m_triangle_id[static_cast<std::size_t>(r)];
     if (i > j) std::swap(i, j);
-    if (accept(i, j)) out.emplace_back(i, j);
+    if (accept(i, j)) {
+      out.emplace_back(i, j);
+      if (first_only) stop.store(true, std::memory_order_relaxed);
+    }
   };
   // Expands a task one level: either resolves it (leaves) or returns its sub-tasks.
   auto expand = [&](const Task& t, std::vector<Task>& sub, std::vector<Pair>& out) {
@@ -223,6 +263,7 @@ std::vector<std::pair<std::int32_t, std::int32_t>> TriangleBvh::self_pairs(
     std::vector<Task> stack{root};
     std::vector<Task> sub;
     while (!stack.empty()) {
+      if (first_only && stop.load(std::memory_order_relaxed)) return;
       const Task t = stack.back();
       stack.pop_back();
       sub.clear();
@@ -237,6 +278,7 @@ std::vector<std::pair<std::int32_t, std::int32_t>> TriangleBvh::self_pairs(
       std::vector<Task> next;
       std::vector<Task> sub;
       for (const Task& t : tasks) {
+        if (first_only && stop.load(std::memory_order_relaxed)) break;
         sub.clear();
         expand(t, sub, result);
         next.insert(next.end(), sub.begin(), sub.end());

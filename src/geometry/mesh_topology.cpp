@@ -182,15 +182,20 @@ TriangleMesh weld_vertices(const TriangleMesh& mesh, double tol_mm) {
   const double cell = tol_mm > 0.0 ? tol_mm : 1.0;
   struct KeyHash {
     std::size_t operator()(const std::array<std::int64_t, 3>& k) const {
-      return static_cast<std::size_t>(k[0] * 73856093LL ^ k[1] * 19349663LL ^ k[2] * 83492791LL);
+      // Unsigned arithmetic: wrap-around is intended here.
+      return (static_cast<std::size_t>(k[0]) * 73856093u) ^ (static_cast<std::size_t>(k[1]) * 19349663u) ^
+             (static_cast<std::size_t>(k[2]) * 83492791u);
     }
   };
   std::unordered_map<std::array<std::int64_t, 3>, std::vector<std::int32_t>, KeyHash> grid;
   grid.reserve(nv);
+  auto cell_of = [&](double x) {
+    // Clamped so that huge coordinates over a tiny tolerance cannot overflow; clamped cells
+    // only merge more candidates, the distance test stays exact.
+    return static_cast<std::int64_t>(std::clamp(std::floor(x / cell), -4e18, 4e18));
+  };
   auto key_of = [&](const Vec3& p) {
-    return std::array<std::int64_t, 3>{static_cast<std::int64_t>(std::floor(p.x() / cell)),
-                                       static_cast<std::int64_t>(std::floor(p.y() / cell)),
-                                       static_cast<std::int64_t>(std::floor(p.z() / cell))};
+    return std::array<std::int64_t, 3>{cell_of(p.x()), cell_of(p.y()), cell_of(p.z())};
   };
   const double tol2 = tol_mm * tol_mm;
   for (std::size_t v = 0; v < nv; ++v) {

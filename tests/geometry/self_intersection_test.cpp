@@ -40,11 +40,11 @@ TEST(SelfIntersection, CleanSurfacesHaveNone) {
 }
 
 TEST(SelfIntersection, OverlappingSpheresIntersectAlongACurve) {
-  const TriangleMesh m = test::merged(icosphere(Vec3(0, 0, 0), 1.0, 3), icosphere(Vec3(1, 0.1, 0), 1.0, 3));
+  const TriangleMesh m = test::merged(icosphere(Vec3(0, 0, 0), 1.0, 2), icosphere(Vec3(1, 0.1, 0), 1.0, 2));
   const Pairs ref = brute_force(m);
   EXPECT_EQ(self_intersections(m), ref);
   const auto half = static_cast<std::int32_t>(m.triangles.size() / 2);
-  ASSERT_GT(ref.size(), 20u);
+  ASSERT_GT(ref.size(), 10u);
   for (const auto& [i, j] : ref) {  // every pair has one triangle from each sphere
     EXPECT_LT(i, half);
     EXPECT_GE(j, half);
@@ -53,7 +53,7 @@ TEST(SelfIntersection, OverlappingSpheresIntersectAlongACurve) {
 
 TEST(SelfIntersection, NoisySphereMatchesBruteForce) {
   // Strong jitter folds the surface: many intersecting pairs, many of them adjacent.
-  for (unsigned seed = 1; seed <= 4; ++seed) {
+  for (unsigned seed = 1; seed <= 2; ++seed) {
     const TriangleMesh m = test::jittered(icosphere(Vec3::Zero(), 1.0, 3), 0.12, seed);
     expect_matches_brute_force(m, true);
   }

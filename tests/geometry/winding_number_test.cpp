@@ -43,11 +43,11 @@ TEST(WindingNumber, ExactSumIsOneInsideZeroOutside) {
 }
 
 TEST(WindingNumber, FastAgreesWithExactSumAndConvergesInBeta) {
-  const TriangleMesh m = test::merged(icosphere(Vec3::Zero(), 3.0, 4), torus_surface(Vec3(8, 0, 0), 3, 1, 64, 32));
+  const TriangleMesh m = test::merged(icosphere(Vec3::Zero(), 3.0, 3), torus_surface(Vec3(8, 0, 0), 3, 1, 48, 24));
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(-5, 13);
   std::vector<Vec3> pts;
-  for (int n = 0; n < 600; ++n) pts.emplace_back(u(rng), u(rng) * 0.5, u(rng) * 0.3);
+  for (int n = 0; n < 400; ++n) pts.emplace_back(u(rng), u(rng) * 0.5, u(rng) * 0.3);
   const WindingNumber exact(m, {.beta = 0.0});
   std::vector<double> ref;
   int inside = 0;
@@ -56,7 +56,7 @@ TEST(WindingNumber, FastAgreesWithExactSumAndConvergesInBeta) {
     EXPECT_TRUE(test::near(ref.back(), exact.exact_at(p), 1e-12));  // only summation order differs
     inside += ref.back() > 0.5;
   }
-  EXPECT_GT(inside, 50);
+  EXPECT_GT(inside, 30);
   // The second-order far field has an error per cluster of order (radius / distance)³, so
   // doubling beta must shrink the worst error by clearly more than 4.
   double previous = 1.0;

@@ -52,10 +52,19 @@ class TriangleBvh {
   [[nodiscard]] std::vector<std::pair<std::int32_t, std::int32_t>> self_pairs(
       const std::function<bool(std::int32_t, std::int32_t)>& accept, bool threaded = true) const;
 
+  /// True when @p accept(i, j) returns true for some pair of distinct triangles whose closed
+  /// boxes overlap; the traversal stops soon after the first such pair (every thread
+  /// checks a shared flag). accept must be thread-safe when @p threaded.
+  [[nodiscard]] bool any_self_pair(const std::function<bool(std::int32_t, std::int32_t)>& accept,
+                                   bool threaded = true) const;
+
   /// The corners of triangle @p id as copied at construction.
   [[nodiscard]] const std::array<Vec3, 3>& corners(std::int32_t id) const;
 
  private:
+  std::vector<std::pair<std::int32_t, std::int32_t>> traverse_self(
+      const std::function<bool(std::int32_t, std::int32_t)>& accept, bool threaded,
+      bool first_only) const;
   struct Node {
     Aabb box;
     std::int32_t first = 0;  // leaf: first slot; inner: left child (right = first + 1)

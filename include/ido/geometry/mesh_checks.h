@@ -25,7 +25,8 @@ struct MeshCheckReport {
   /// Around every vertex the incident triangles form a single fan (connected through edges
   /// at that vertex), so the neighbourhood is a disc or a half-disc.
   bool vertex_manifold = false;
-  /// Every edge used by two triangles is traversed once in each direction.
+  /// The mesh is edge-manifold and every edge used by two triangles is traversed once in
+  /// each direction (neighbouring triangles agree on the orientation).
   bool oriented = false;
   /// V − E + F with the counts above.
   std::int64_t euler_characteristic = 0;

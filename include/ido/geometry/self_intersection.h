@@ -31,8 +31,8 @@ struct SelfIntersectionOptions {
 [[nodiscard]] std::vector<std::pair<std::int32_t, std::int32_t>> self_intersections(
     const TriangleMesh& mesh, const SelfIntersectionOptions& options = {});
 
-/// True when self_intersections(mesh) would not be empty; skips the remaining exact tests
-/// once one intersecting pair is found.
+/// True when self_intersections(mesh) would not be empty; the search stops soon after the
+/// first intersecting pair.
 [[nodiscard]] bool has_self_intersections(const TriangleMesh& mesh,
                                           const SelfIntersectionOptions& options = {});
 
