@@ -156,7 +156,7 @@ class Reader {
   std::string m_source;
 };
 
-constexpr std::int64_t kMaxGeneratedCells = 2'000'000;
+constexpr std::int64_t kMaxGeneratedCells = 500'000;
 constexpr std::size_t kNoModel = static_cast<std::size_t>(-1);
 
 geometry::TetMesh read_body_mesh(const Reader& r, const json& j, const std::string& ptr,
