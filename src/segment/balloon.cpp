@@ -192,7 +192,7 @@ struct Balloon::State {
           }
           const double I = smoothed.sample(x[i]);
           if (edge_stage) {
-            const auto t = edge_offset_along_normal(smoothed, x[i], nrm, model, search, 0.1 * h, min_rise, h);
+            const auto t = edge_offset_along_normal(smoothed, x[i], nrm, model, search, 0.2 * h, min_rise, h);
             if (t) {
               // Blur (the scanner's and our pre-smoothing) moves the half-way level of a curved
               // wall inwards by about σ² H (H the mean curvature): add it back.
