@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 
 #include <fmt/format.h>
 #include <itkGDCMImageIO.h>
@@ -137,6 +138,23 @@ RawVolume itk_read_file(const std::string& path, VolumeKind kind) {
   if (io->GetNumberOfComponents() != 1)
     throw IoError(path, fmt::format("{} components per voxel; expected a scalar volume",
                                     io->GetNumberOfComponents()));
+  // ITK reads a too-short uncompressed file without complaint: check its size first.
+  bool uncompressed = false;
+  if (kind == VolumeKind::Nifti) {
+    uncompressed = path.size() < 3 || path.compare(path.size() - 3, 3, ".gz") != 0;
+  } else if (kind == VolumeKind::Meta) {
+    auto* meta = dynamic_cast<itk::MetaImageIO*>(io.GetPointer());
+    uncompressed = meta && !meta->GetMetaImagePointer()->CompressedData() &&
+                   std::string(meta->GetMetaImagePointer()->ElementDataFileName()) == "LOCAL";
+  }
+  std::error_code ec;
+  const auto file_size = std::filesystem::file_size(path, ec);
+  // A single-file NIfTI-1 header takes at least 352 bytes before the voxels.
+  const std::uintmax_t header_bytes = kind == VolumeKind::Nifti ? 352 : 0;
+  const auto voxel_bytes = static_cast<std::uintmax_t>(io->GetImageSizeInBytes());
+  if (uncompressed && !ec && file_size < header_bytes + voxel_bytes)
+    throw IoError(path, fmt::format("file has {} bytes, too few for the {} bytes of voxels its header declares (truncated?)",
+                                    file_size, voxel_bytes));
   auto reader = itk::ImageFileReader<FloatImage>::New();
   reader->SetImageIO(io);
   reader->SetFileName(path);

@@ -160,7 +160,9 @@ geometry::TetMesh read_tet_mesh(const fs::path& path) {
   if (e == ".msh") return parse_gmsh_tets(read_file_bytes(path), name);
   if (e == ".node" || e == ".ele") {
     const auto [node, ele] = tetgen_pair(path);
-    return parse_tetgen(read_file_bytes(node), node.string(), read_file_bytes(ele), ele.string());
+    const std::string node_bytes = read_file_bytes(node);  // node first: errors name it first
+    const std::string ele_bytes = read_file_bytes(ele);
+    return parse_tetgen(node_bytes, node.string(), ele_bytes, ele.string());
   }
   throw IoError(name, "unknown tetrahedral mesh extension (expected .vtu, .msh, .node or .ele)");
 }

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <system_error>
 
 #include "ido/core/atomic_file.h"
@@ -106,6 +107,30 @@ void write_volume(const fs::path& path, const image::Volume<std::uint8_t>& volum
 }
 void write_volume(const fs::path& path, const image::Volume<std::int16_t>& volume) {
   write_any(path, volume, detail::PixelKind::Int16);
+}
+
+void write_volume_as_stored(const fs::path& path, const image::Volume<float>& volume,
+                            const VolumeFileInfo& source) {
+  const std::string& t = source.pixel_type;
+  const bool to_u8 = t == "unsigned_char";
+  const bool to_i16 = t == "short" || t == "char" || t == "unsigned_short";
+  auto all_integral_in = [&](double lo, double hi) {
+    return std::all_of(volume.data().begin(), volume.data().end(),
+                       [&](float v) { return v >= lo && v <= hi && v == std::floor(v); });
+  };
+  if (to_u8 && all_integral_in(0, 255)) {
+    auto out = volume.like<std::uint8_t>();
+    std::transform(volume.data().begin(), volume.data().end(), out.data().begin(),
+                   [](float v) { return static_cast<std::uint8_t>(v); });
+    return write_volume(path, out);
+  }
+  if ((to_i16 || to_u8) && all_integral_in(-32768, 32767)) {
+    auto out = volume.like<std::int16_t>();
+    std::transform(volume.data().begin(), volume.data().end(), out.data().begin(),
+                   [](float v) { return static_cast<std::int16_t>(v); });
+    return write_volume(path, out);
+  }
+  write_volume(path, volume);
 }
 
 bool looks_like_volume(const fs::path& path) {

@@ -32,6 +32,13 @@ void write_volume(const std::filesystem::path& path, const image::Volume<float>&
 void write_volume(const std::filesystem::path& path, const image::Volume<std::uint8_t>& volume);
 void write_volume(const std::filesystem::path& path, const image::Volume<std::int16_t>& volume);
 
+/// Writes @p volume in the stored pixel type of the file it came from (@p source, as filled
+/// by read_volume): uint8 or int16 when the source held such integers (or int8/uint16 whose
+/// values all fit int16) and every voxel is an integer in range; float otherwise. Used to
+/// convert e.g. an int16 DICOM series to an int16 NIfTI without doubling its size.
+void write_volume_as_stored(const std::filesystem::path& path, const image::Volume<float>& volume,
+                            const VolumeFileInfo& source);
+
 /// True if @p path names something read_volume can try (a known volume extension or a
 /// folder).
 [[nodiscard]] bool looks_like_volume(const std::filesystem::path& path);

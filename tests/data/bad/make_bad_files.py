@@ -1,0 +1,94 @@
+#!/usr/bin/python3
+# SPDX-License-Identifier: Apache-2.0
+"""Regenerates the bad-input catalogue's files (run from this folder). Each file breaks one
+rule; catalogue.txt says which exception and message fragment ido must give for it."""
+import os
+import struct
+
+def w(name, data):
+    with open(name, "wb") as f:
+        f.write(data if isinstance(data, bytes) else data.encode())
+
+TRI = "v 0 0 0\nv 1 0 0\nv 0 1 0\n"
+w("empty.stl", b"")
+w("short.stl", b"not an stl at all")
+w("binary_truncated.stl", b"\0" * 80 + struct.pack("<I", 10) + b"\0" * 100)
+w("ascii_truncated.stl", "solid x\n facet normal 0 0 1\n  outer loop\n   vertex 0 0 0\n   vertex 1 0 0\n   vertex 0 1 0\n  endloop\n endfacet\n")
+w("ascii_nonnumeric.stl", "solid x\n facet normal 0 0 1\n  outer loop\n   vertex 0 0 0\n   vertex 1 abc 0\n   vertex 0 1 0\n  endloop\n endfacet\nendsolid x\n")
+w("ascii_nan.stl", "solid x\n facet normal 0 0 1\n  outer loop\n   vertex 0 0 0\n   vertex 1 0 0\n   vertex 0 nan 0\n  endloop\n endfacet\nendsolid x\n")
+w("index_out_of_range.obj", TRI + "f 1 2 9\n")
+w("nonnumeric.obj", "v 0 0 0\nv 1 x 0\nv 0 1 0\nf 1 2 3\n")
+w("short_face.obj", TRI + "f 1 2\n")
+w("infinite.obj", "v 0 0 0\nv 1 0 0\nv 0 inf 0\nf 1 2 3\n")
+w("wrong_magic.ply", "plx\nformat ascii 1.0\nelement vertex 0\nend_header\n")
+w("no_end_header.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n")
+hdr = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+w("binary_truncated.ply", hdr.encode() + struct.pack("<6f", 0, 0, 0, 1, 0, 0))
+ahdr = "ply\nformat ascii 1.0\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+w("count_mismatch.ply", ahdr.format(4) + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")
+w("index_out_of_range.ply", ahdr.format(3) + "0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n")
+w("not_xml.vtp", "this is not XML\n")
+VTU = """<?xml version="1.0"?>
+<VTKFile type="{type}" version="1.0" byte_order="LittleEndian"{extra}>
+  <UnstructuredGrid>
+    <Piece NumberOfPoints="{np}" NumberOfCells="1">
+      <Points>
+        <DataArray type="Float64" NumberOfComponents="3" format="{fmt}">
+          {points}
+        </DataArray>
+      </Points>
+      <Cells>
+        <DataArray type="Int64" Name="connectivity" format="ascii">{conn}</DataArray>
+        <DataArray type="Int64" Name="offsets" format="ascii">4</DataArray>
+        <DataArray type="UInt8" Name="types" format="ascii">10</DataArray>
+      </Cells>
+    </Piece>
+  </UnstructuredGrid>
+</VTKFile>
+"""
+P = "0 0 0 1 0 0 0 1 0 0 0 1"
+def vtu(**kw):
+    d = dict(type="UnstructuredGrid", extra="", np=4, fmt="ascii", points=P, conn="0 1 2 3")
+    d.update(kw)
+    return VTU.format(**d)
+w("wrong_type.vtp", vtu())
+w("truncated.vtu", vtu()[:400])
+w("count_mismatch.vtu", vtu(np=5))
+w("inverted.vtu", vtu(conn="0 2 1 3"))
+w("degenerate.vtu", vtu(points="0 0 0 1 0 0 0 1 0 1 1 0"))
+w("index_out_of_range.vtu", vtu(conn="0 1 2 8"))
+w("bad_base64.vtu", vtu(fmt="binary", points="!!!!not*base64"))
+w("compressed.vtu", vtu(extra=' compressor="vtkZLibDataCompressor"'))
+w("nonnumeric.vtu", vtu(points="0 0 0 1 0 0 0 1 0 0 0 one"))
+w("nan.vtu", vtu(points="0 0 0 1 0 0 0 1 0 0 0 nan"))
+MSH2 = "$MeshFormat\n{ver} {ft} 8\n$EndMeshFormat\n$Nodes\n{nn}\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 {z}\n$EndNodes\n$Elements\n1\n1 4 2 0 1 1 2 3 {last}\n$EndElements\n"
+def msh(**kw):
+    d = dict(ver="2.2", ft=0, nn=4, z=1, last=4)
+    d.update(kw)
+    return MSH2.format(**d)
+w("wrong_version.msh", msh(ver="3.0"))
+w("binary.msh", msh(ft=1))
+w("missing_node.msh", msh(last=99))
+w("count_mismatch.msh", msh(nn=5))
+w("nan.msh", msh(z="nan"))
+w("no_meshformat.msh", "$Nodes\n0\n$EndNodes\n")
+w("inverted.node", "4 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n")
+w("inverted.ele", "1 4 0\n1 1 3 2 4\n")
+w("index_out_of_range.node", "4 3 0 0\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n")
+w("index_out_of_range.ele", "1 4 0\n1 1 2 3 9\n")
+w("dimension2.node", "3 2 0 0\n1 0 0\n2 1 0\n3 0 1\n")
+w("dimension2.ele", "0 4 0\n")
+w("garbage.nii", "this is not a NIfTI header" * 20)
+# NIfTI-1 header for a 4x4x4 int16 volume whose voxel data is cut short.
+h = bytearray(352)
+struct.pack_into("<i", h, 0, 348)
+struct.pack_into("<8h", h, 40, 3, 4, 4, 4, 1, 1, 1, 1)
+struct.pack_into("<hh", h, 70, 4, 16)
+struct.pack_into("<8f", h, 76, 1, 1, 1, 1, 1, 1, 1, 1)
+struct.pack_into("<f", h, 108, 352.0)
+h[344:348] = b"n+1\0"
+w("truncated.nii", bytes(h) + b"\0" * 10)
+w("bad_sizes.nrrd", "NRRD0004\ntype: float\ndimension: 3\nsizes: 2 2\nencoding: raw\n\n")
+w("truncated.mha", "ObjectType = Image\nNDims = 3\nDimSize = 4 4 4\nElementType = MET_FLOAT\nElementDataFile = LOCAL\n" + "\0" * 8)
+os.makedirs("folder.vtu", exist_ok=True)
+w("folder.vtu/.keep", "")
