@@ -150,25 +150,36 @@ bool grid_pairs(const std::vector<Aabb>& boxes, const Accept& accept, bool threa
       [&](std::size_t gb, std::size_t ge) {
         Pairs local;
         std::vector<Aabb> gathered;
+        std::vector<std::array<std::uint32_t, 3>> low;
         for (std::size_t g = gb; g < ge; ++g) {
           if (first_only && stop.load(std::memory_order_relaxed)) break;
           const std::size_t c = busy[g];
           const std::uint32_t b = start[c];
           const std::uint32_t e = start[c + 1];
           gathered.clear();
-          for (std::uint32_t i = b; i < e; ++i) gathered.push_back(boxes[static_cast<std::size_t>(items[i])]);
+          low.clear();
           for (std::uint32_t i = b; i < e; ++i) {
-            const Aabb& bi = gathered[i - b];
-            const auto ti = static_cast<std::size_t>(items[i]);
-            for (std::uint32_t j = i + 1; j < e; ++j) {
-              if (!bi.overlaps(gathered[j - b])) continue;
-              // The lower corner of the boxes' intersection lies in cell max(lo_i, lo_j).
-              const auto tj = static_cast<std::size_t>(items[j]);
-              const std::size_t owner = key(std::max(range[ti][0], range[tj][0]), std::max(range[ti][1], range[tj][1]),
-                                            std::max(range[ti][2], range[tj][2]));
-              if (owner != c) continue;
-              if (accept(items[i], items[j])) {
-                local.emplace_back(items[i], items[j]);
+            const auto t = static_cast<std::size_t>(items[i]);
+            gathered.push_back(boxes[t]);
+            low.push_back({range[t][0], range[t][1], range[t][2]});
+          }
+          const std::uint32_t cz = static_cast<std::uint32_t>(c / (static_cast<std::size_t>(dims[0]) * dims[1]));
+          const std::uint32_t cy = static_cast<std::uint32_t>((c / dims[0]) % dims[1]);
+          const std::uint32_t cx = static_cast<std::uint32_t>(c % dims[0]);
+          for (std::uint32_t i = 0; i < e - b; ++i) {
+            const Aabb& bi = gathered[i];
+            const auto& li = low[i];
+            for (std::uint32_t j = i + 1; j < e - b; ++j) {
+              // Owner test first (integers): the lower corner of the boxes' intersection
+              // lies in cell max(lo_i, lo_j), which must be this cell.
+              const auto& lj = low[j];
+              if (std::max(li[0], lj[0]) != cx || std::max(li[1], lj[1]) != cy ||
+                  std::max(li[2], lj[2]) != cz) {
+                continue;
+              }
+              if (!bi.overlaps(gathered[j])) continue;
+              if (accept(items[b + i], items[b + j])) {
+                local.emplace_back(items[b + i], items[b + j]);
                 if (first_only) stop.store(true, std::memory_order_relaxed);
               }
             }
