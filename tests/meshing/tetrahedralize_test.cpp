@@ -13,6 +13,8 @@
 #include <gtest/gtest.h>
 
 #include "ido/core/error.h"
+#include "ido/geometry/mesh_checks.h"
+#include "ido/geometry/tet_quality.h"
 #include "ido/meshing/distance_field.h"
 #include "support/test_support.h"
 
@@ -223,6 +225,15 @@ TEST(Tetrahedralize, SphereQualityVolumeAndBoundary) {
   EXPECT_TRUE(topo.closed_oriented_manifold);
   EXPECT_EQ(topo.euler, 2);
   EXPECT_EQ(topo.components, 1);
+  // the same through the geometry module's checks
+  const auto report = geometry::check_tet_mesh(mesh);
+  EXPECT_EQ(report.inverted, 0u);
+  EXPECT_EQ(report.degenerate, 0u);
+  EXPECT_TRUE(report.boundary_closed);
+  EXPECT_TRUE(report.boundary_manifold);
+  const auto checks = geometry::check_mesh(geometry::tet_boundary(mesh));
+  EXPECT_TRUE(checks.closed && checks.edge_manifold && checks.vertex_manifold && checks.oriented);
+  EXPECT_EQ(checks.genus, std::optional<int>(0));
 
   // mesh boundary → true surface: vertices and face points within h of the sphere
   double worst = 0;
@@ -269,6 +280,7 @@ TEST(Tetrahedralize, TorusKeepsItsGenus) {
   EXPECT_TRUE(topo.closed_oriented_manifold);
   EXPECT_EQ(topo.components, 1);
   EXPECT_EQ(topo.euler, 0) << "a torus has genus 1";
+  EXPECT_EQ(geometry::check_mesh(geometry::tet_boundary(mesh)).genus, std::optional<int>(1));
   const double exact = 2 * kPi * kPi * 9.0 * 3.5 * 3.5;
   EXPECT_TRUE(test::rel_near(quality(mesh).total_volume, exact, 0.02));
 }
