@@ -81,6 +81,10 @@ struct Across {
   std::array<int, 4> vmap{-1, -1, -1, -1};
 };
 
+}  // namespace
+struct AcrossCache;
+namespace {
+
 // Child c of a node with vertex-pair codes `codes` (3 pairs in the node's local indices, on
 // the node's face g): finds the child slot, its face on g, and its local index per code.
 bool find_child_face(int g, const std::array<int, 3>& codes, int& child, int& child_face, std::array<int, 3>& local) {
@@ -108,7 +112,42 @@ bool find_child_face(int g, const std::array<int, 3>& codes, int& child, int& ch
   return false;
 }
 
-Across across(const TetHierarchy& h, const NodeRef& n, int f) {
+}  // namespace
+
+// Memo of across() within one v_list rebuild (siblings share their parents' answers).
+struct AcrossCache {
+  struct Key {
+    std::uint32_t root, path;
+    std::uint8_t depth, face;
+    friend bool operator==(const Key&, const Key&) = default;
+  };
+  struct KeyHash {
+    std::size_t operator()(const Key& k) const noexcept {
+      std::uint64_t x = (static_cast<std::uint64_t>(k.root) << 32) ^ (static_cast<std::uint64_t>(k.path) << 6) ^
+                        (static_cast<std::uint64_t>(k.depth) << 2) ^ k.face;
+      x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
+      x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
+      return static_cast<std::size_t>(x ^ (x >> 31));
+    }
+  };
+  std::unordered_map<Key, Across, KeyHash> map;
+};
+
+namespace {
+
+Across across_uncached(const TetHierarchy& h, const NodeRef& n, int f, AcrossCache& cache);
+
+Across across(const TetHierarchy& h, const NodeRef& n, int f, AcrossCache& cache) {
+  if (n.depth == 0) return across_uncached(h, n, f, cache);
+  const AcrossCache::Key key{n.root, n.path, n.depth, static_cast<std::uint8_t>(f)};
+  const auto it = cache.map.find(key);
+  if (it != cache.map.end()) return it->second;
+  const Across a = across_uncached(h, n, f, cache);
+  cache.map.emplace(key, a);
+  return a;
+}
+
+Across across_uncached(const TetHierarchy& h, const NodeRef& n, int f, AcrossCache& cache) {
   if (n.depth == 0) {
     const auto nb = h.root_neighbor(n.root, f);
     if (nb.root < 0) return {true, {}, -1, {}};
@@ -135,7 +174,7 @@ Across across(const TetHierarchy& h, const NodeRef& n, int f) {
     }
     return a;
   }
-  const Across pa = across(h, p, link.parent_face);
+  const Across pa = across(h, p, link.parent_face, cache);
   if (pa.boundary) return pa;
   if (pa.node.depth < p.depth || h.state(pa.node) != NodeState::Internal) return pa;  // a coarser leaf
   // Same depth as the parent and refined: the child of pa.node holding our face.
@@ -213,7 +252,12 @@ Vec3 point_position(const PointKey& key, std::span<const Vec3> vertices_mm) noex
   return p / static_cast<double>(kBaryScale);
 }
 
-BoundarySurface::BoundarySurface(const TetHierarchy& hierarchy) { rebuild_all(hierarchy); }
+BoundarySurface::BoundarySurface(const TetHierarchy& hierarchy) : m_cache(std::make_unique<AcrossCache>()) {
+  rebuild_all(hierarchy);
+}
+BoundarySurface::~BoundarySurface() = default;
+BoundarySurface::BoundarySurface(BoundarySurface&&) noexcept = default;
+BoundarySurface& BoundarySurface::operator=(BoundarySurface&&) noexcept = default;
 
 std::size_t BoundarySurface::face_count() const noexcept {
   std::size_t n = 0;
@@ -255,12 +299,14 @@ void BoundarySurface::update(const TetHierarchy& hierarchy, std::span<const std:
 void BoundarySurface::rebuild_root(const TetHierarchy& hierarchy, std::size_t r) {
   auto& out = m_faces[r];
   out.clear();
+  AcrossCache& cache = *m_cache;
+  cache.map.clear();
   hierarchy.for_each_leaf(r, [&](const NodeRef& n, NodeState st) {
     if (st != NodeState::Full) return;
     NodeGeometry g;
     bool have_geometry = false;
     for (int f = 0; f < 4; ++f) {
-      const Across a = across(hierarchy, n, f);
+      const Across a = across(hierarchy, n, f, cache);
       const NodeState other = a.boundary ? NodeState::Erased : hierarchy.state(a.node);
       if (other == NodeState::Full) continue;
       if (!have_geometry) {

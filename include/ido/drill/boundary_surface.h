@@ -3,6 +3,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -39,6 +40,9 @@ class BoundarySurface {
  public:
   /// Builds every root's v_list.
   explicit BoundarySurface(const TetHierarchy& hierarchy);
+  ~BoundarySurface();
+  BoundarySurface(BoundarySurface&&) noexcept;
+  BoundarySurface& operator=(BoundarySurface&&) noexcept;
 
   /// Rebuilds the v_lists of @p changed_roots and of their face neighbours (a change can
   /// expose a neighbour's face); the rebuilt roots are then in last_rebuilt().
@@ -59,6 +63,7 @@ class BoundarySurface {
   std::vector<std::vector<SurfaceFace>> m_faces;
   std::vector<std::uint32_t> m_rebuilt;
   std::vector<std::uint8_t> m_mark;
+  std::unique_ptr<struct AcrossCache> m_cache;  // scratch memo of face neighbours
 };
 
 /// The welded, crack-free triangle mesh (mm) of the faces in @p v_lists on mesh vertices

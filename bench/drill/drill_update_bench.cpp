@@ -1,0 +1,187 @@
+// SPDX-License-Identifier: Apache-2.0
+// Drilling figures: update time (collide + erode + v_list rebuild) per collision update at
+// depths 4–8, bytes per node, the haptic loop over a scripted trace, and voxel removal in
+// OpenVDB on the same trace at the same resolution (when built with OpenVDB).
+#include <benchmark/benchmark.h>
+
+#include <chrono>
+#include <cmath>
+#include <vector>
+
+#include "ido/drill/boundary_surface.h"
+#include "ido/drill/collision.h"
+#include "ido/drill/erosion.h"
+#include "ido/drill/shapes.h"
+#include "ido/drill/simulator.h"
+#include "ido/drill/tet_hierarchy.h"
+
+#ifdef IDO_BENCH_OPENVDB
+#include <openvdb/openvdb.h>
+#endif
+
+namespace {
+
+using namespace ido;
+using namespace ido::drill;
+
+constexpr double kBlockCell = 4.0;  // root cube edge (mm)
+const Vec3 kBlock(32.0, 32.0, 16.0);
+constexpr double kRadius = 2.0;
+constexpr double kSpeedMmPerS = 20.0;  // tool speed along the trace
+constexpr int kUpdates = 1000;         // collision updates (1 ms apart)
+
+// The trace: a plunge 3 mm into the top face, then a curve, one pose per millisecond.
+Vec3 trace(int i) {
+  const double t = i * 1e-3;
+  const double s = kSpeedMmPerS * t;  // arc length (mm)
+  if (s < 3.0) return {8.0, 16.0, kBlock.z() + kRadius - s};
+  const double u = s - 3.0;
+  return {8.0 + u, 16.0 + 4.0 * std::sin(u / 4.0), kBlock.z() + kRadius - 3.0};
+}
+
+double leaf_edge(int depth) { return kBlockCell * std::sqrt(3.0) / std::ldexp(1.0, depth); }
+
+void BM_UpdateTime(benchmark::State& state) {
+  const int depth = static_cast<int>(state.range(0));
+  std::vector<double> times;
+  double bytes = 0.0, nodes = 0.0, storage = 0.0;
+  for (auto _ : state) {
+    TetHierarchy h(make_block(kBlock, kBlockCell));
+    BoundarySurface surface(h);
+    const Tool tool({.burr_radius_mm = kRadius, .sample_count = 1000});
+    Eroder eroder({.force_threshold_n = 0.0, .removal_rate_mm3_per_s = 0.0, .max_depth = depth});
+    times.clear();
+    Vec3 last = trace(0);
+    for (int i = 0; i < kUpdates; ++i) {
+      const auto t0 = std::chrono::steady_clock::now();
+      ToolPose pose;
+      pose.position_mm = trace(i);
+      const ContactModel m = collide(h, tool, pose);
+      benchmark::DoNotOptimize(m);
+      const int n = std::max(1, static_cast<int>(std::ceil((pose.position_mm - last).norm() / (0.25 * kRadius))));
+      for (int k = 1; k <= n; ++k) eroder.erode(h, last + (pose.position_mm - last) * (double(k) / n), kRadius, 1.0, 1e-3 / n);
+      surface.update(h, eroder.changed_roots());
+      eroder.clear_changed_roots();
+      last = pose.position_mm;
+      times.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    }
+    bytes = h.bytes_per_node();
+    storage = static_cast<double>(h.node_storage_bytes());
+    nodes = static_cast<double>(h.node_count());
+  }
+  const auto p = percentiles(times);
+  state.counters["p50_ms"] = p.p50 * 1e3;
+  state.counters["p99_ms"] = p.p99 * 1e3;
+  state.counters["max_ms"] = p.max * 1e3;
+  state.counters["bytes_per_node"] = bytes;
+  state.counters["node_storage_kB"] = storage / 1024.0;
+  state.counters["nodes"] = nodes;
+  state.counters["leaf_edge_mm"] = leaf_edge(depth);
+}
+BENCHMARK(BM_UpdateTime)->DenseRange(4, 8)->Iterations(1)->Unit(benchmark::kMillisecond);
+
+// The haptic loop over a scripted trace through the three threads.
+void BM_HapticLoop(benchmark::State& state) {
+  const double seconds = static_cast<double>(state.range(0));
+  SessionStats st;
+  for (auto _ : state) {
+    TetHierarchy h(make_block(kBlock, kBlockCell));
+    std::vector<double> t;
+    std::vector<ToolPose> poses;
+    for (int i = 0; i <= static_cast<int>(seconds * 100); ++i) {
+      t.push_back(i * 0.01);
+      ToolPose p;
+      // Back and forth along the block at 10 mm/s, 1 mm into the top face.
+      const double x = 6.0 + 10.0 * std::abs(std::fmod(i * 0.1, 40.0) - 20.0);
+      p.position_mm = Vec3(x, 16.0 + 3.0 * std::sin(i * 0.01), kBlock.z() + kRadius - 1.0);
+      poses.push_back(p);
+    }
+    ScriptedTrajectory device(t, poses);
+    SimulatorOptions o;
+    o.tool.burr_radius_mm = kRadius;
+    o.erosion = {.force_threshold_n = 0.2, .removal_rate_mm3_per_s = 30.0, .max_depth = 6};
+    Simulator sim(h, device, o);
+    sim.run(seconds + 30.0);
+    st = sim.stats();
+  }
+  const auto period = percentiles(st.haptic_period_s);
+  const auto force = percentiles(st.force_compute_time_s);
+  const auto update = percentiles(st.update_time_s);
+  state.counters["ticks"] = static_cast<double>(st.haptic_ticks);
+  state.counters["missed_1ms"] = static_cast<double>(st.missed_deadlines);
+  state.counters["period_p50_ms"] = period.p50 * 1e3;
+  state.counters["period_p99_ms"] = period.p99 * 1e3;
+  state.counters["period_max_ms"] = period.max * 1e3;
+  state.counters["force_p99_9_ms"] = force.p999 * 1e3;
+  state.counters["force_max_ms"] = force.max * 1e3;
+  state.counters["update_p50_ms"] = update.p50 * 1e3;
+  state.counters["update_p99_ms"] = update.p99 * 1e3;
+  state.counters["removed_mm3"] = st.removed_volume_mm3;
+}
+BENCHMARK(BM_HapticLoop)->Arg(10)->Iterations(1)->Unit(benchmark::kMillisecond);
+
+#ifdef IDO_BENCH_OPENVDB
+// Voxel removal in OpenVDB on the same trace: voxels of edge = leaf edge at `depth`; per
+// update, 1000 sample points are looked up (collision) and the voxels inside the sphere
+// switched off (erosion). No surface extraction (ours includes the v_list rebuild).
+void BM_OpenVdbUpdateTime(benchmark::State& state) {
+  openvdb::initialize();
+  const int depth = static_cast<int>(state.range(0));
+  const double h = leaf_edge(depth) / std::sqrt(3.0) * std::sqrt(2.0);  // voxel edge ~ leaf mean edge
+  std::vector<double> times;
+  double mem = 0.0;
+  for (auto _ : state) {
+    auto grid = openvdb::BoolGrid::create(false);
+    grid->setTransform(openvdb::math::Transform::createLinearTransform(h));
+    const openvdb::Coord hi(static_cast<int>(kBlock.x() / h) - 1, static_cast<int>(kBlock.y() / h) - 1,
+                            static_cast<int>(kBlock.z() / h) - 1);
+    grid->denseFill(openvdb::CoordBBox(openvdb::Coord(0, 0, 0), hi), true, true);
+    grid->tree().prune();
+    const Tool tool({.burr_radius_mm = kRadius, .sample_count = 1000});
+    auto acc = grid->getAccessor();
+    times.clear();
+    Vec3 last = trace(0);
+    for (int i = 0; i < kUpdates; ++i) {
+      const auto t0 = std::chrono::steady_clock::now();
+      const Vec3 c = trace(i);
+      int inside = 0;
+      for (const auto& s : tool.burr_samples()) {
+        const Vec3 p = c + s;
+        inside += acc.isValueOn(openvdb::Coord(static_cast<int>(std::floor(p.x() / h)), static_cast<int>(std::floor(p.y() / h)),
+                                               static_cast<int>(std::floor(p.z() / h))))
+                      ? 1
+                      : 0;
+      }
+      benchmark::DoNotOptimize(inside);
+      const int n = std::max(1, static_cast<int>(std::ceil((c - last).norm() / (0.25 * kRadius))));
+      for (int k = 1; k <= n; ++k) {
+        const Vec3 q = last + (c - last) * (double(k) / n);
+        const int r = static_cast<int>(std::ceil(kRadius / h)) + 1;
+        const openvdb::Coord ctr(static_cast<int>(std::floor(q.x() / h)), static_cast<int>(std::floor(q.y() / h)),
+                                 static_cast<int>(std::floor(q.z() / h)));
+        for (int dx = -r; dx <= r; ++dx)
+          for (int dy = -r; dy <= r; ++dy)
+            for (int dz = -r; dz <= r; ++dz) {
+              const openvdb::Coord v = ctr.offsetBy(dx, dy, dz);
+              const Vec3 centre((v.x() + 0.5) * h, (v.y() + 0.5) * h, (v.z() + 0.5) * h);
+              if ((centre - q).squaredNorm() <= kRadius * kRadius && acc.isValueOn(v)) acc.setValueOff(v, false);
+            }
+      }
+      last = c;
+      times.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    }
+    mem = static_cast<double>(grid->memUsage());
+  }
+  const auto p = percentiles(times);
+  state.counters["p50_ms"] = p.p50 * 1e3;
+  state.counters["p99_ms"] = p.p99 * 1e3;
+  state.counters["max_ms"] = p.max * 1e3;
+  state.counters["memory_kB"] = mem / 1024.0;
+  state.counters["voxel_mm"] = h;
+}
+BENCHMARK(BM_OpenVdbUpdateTime)->DenseRange(4, 8)->Iterations(1)->Unit(benchmark::kMillisecond);
+#endif
+
+}  // namespace
+
+BENCHMARK_MAIN();
