@@ -23,8 +23,9 @@ struct BvhTree {
   std::vector<std::int32_t> order;  ///< item ids in leaf order
 };
 
-/// Top-down build: split at the median centroid along the longest axis of the centroids'
-/// box, down to at most @p leaf_size items per leaf. O(n log n).
+/// Build: items sorted along a Morton curve of their centroids, the ordered range halved
+/// recursively down to at most @p leaf_size items per leaf, boxes filled bottom-up.
+/// O(n log n).
 BvhTree build_bvh(const std::vector<Aabb>& boxes, const std::vector<Vec3>& centroids,
                   int leaf_size);
 

@@ -13,6 +13,7 @@
 #include "ido/geometry/aabb.h"
 #include "ido/geometry/bvh.h"
 #include "ido/geometry/mesh_topology.h"
+#include "ido/geometry/predicates.h"
 #include "ido/geometry/triangle_intersection.h"
 
 namespace ido::geometry {
@@ -45,15 +46,23 @@ int align_shared(const Tri& a, const Tri& b, std::array<int, 3>& pa, std::array<
   return shared;
 }
 
-bool pair_intersects(const Tri& ta, const Triangle3& ca, const Tri& tb, const Triangle3& cb) {
+bool pair_intersects(const std::vector<Vec3>& vertices, const Tri& ta, const Tri& tb) {
   std::array<int, 3> pa{};
   std::array<int, 3> pb{};
   const int shared = align_shared(ta, tb, pa, pb);
-  if (shared == 0) return triangles_intersect(ca, cb);
-  const Triangle3 a{ca[static_cast<std::size_t>(pa[0])], ca[static_cast<std::size_t>(pa[1])],
-                    ca[static_cast<std::size_t>(pa[2])]};
-  const Triangle3 b{cb[static_cast<std::size_t>(pb[0])], cb[static_cast<std::size_t>(pb[1])],
-                    cb[static_cast<std::size_t>(pb[2])]};
+  auto at = [&](const Tri& t, int k) -> const Vec3& {
+    return vertices[static_cast<std::size_t>(t[static_cast<std::size_t>(k)])];
+  };
+  const Triangle3 a{at(ta, pa[0]), at(ta, pa[1]), at(ta, pa[2])};
+  const Triangle3 b{at(tb, pb[0]), at(tb, pb[1]), at(tb, pb[2])};
+  if (shared == 0) return triangles_intersect(a, b);
+  // Fast exits for the common neighbour pairs (the full test repeats them in rare cases).
+  if (shared == 1) {
+    if (sign_of(orient3d(b[0], b[1], b[2], a[1])) * sign_of(orient3d(b[0], b[1], b[2], a[2])) > 0) return false;
+    if (sign_of(orient3d(a[0], a[1], a[2], b[1])) * sign_of(orient3d(a[0], a[1], a[2], b[2])) > 0) return false;
+  } else if (shared == 2) {
+    if (orient3d(a[0], a[1], a[2], b[2]) != 0.0) return false;
+  }
   return adjacent_triangles_intersect(a, b, shared);
 }
 
@@ -62,11 +71,7 @@ bool pair_intersects(const Tri& ta, const Triangle3& ca, const Tri& tb, const Tr
 bool mesh_triangles_intersect(const TriangleMesh& mesh, std::int32_t t1, std::int32_t t2) {
   const Tri& a = mesh.triangles[static_cast<std::size_t>(t1)];
   const Tri& b = mesh.triangles[static_cast<std::size_t>(t2)];
-  auto corners = [&](const Tri& t) {
-    return Triangle3{mesh.vertices[static_cast<std::size_t>(t[0])], mesh.vertices[static_cast<std::size_t>(t[1])],
-                     mesh.vertices[static_cast<std::size_t>(t[2])]};
-  };
-  return pair_intersects(a, corners(a), b, corners(b));
+  return pair_intersects(mesh.vertices, a, b);
 }
 
 namespace {
@@ -206,14 +211,9 @@ Pairs find_pairs(const TriangleMesh& mesh, const SelfIntersectionOptions& option
                                  mesh.vertices[static_cast<std::size_t>(tri[1])],
                                  mesh.vertices[static_cast<std::size_t>(tri[2])]);
   }
-  auto corners = [&](std::int32_t t) {
-    const Tri& tri = mesh.triangles[static_cast<std::size_t>(t)];
-    return Triangle3{mesh.vertices[static_cast<std::size_t>(tri[0])], mesh.vertices[static_cast<std::size_t>(tri[1])],
-                     mesh.vertices[static_cast<std::size_t>(tri[2])]};
-  };
   auto accept = [&](std::int32_t i, std::int32_t j) {
-    return pair_intersects(mesh.triangles[static_cast<std::size_t>(i)], corners(i),
-                           mesh.triangles[static_cast<std::size_t>(j)], corners(j));
+    return pair_intersects(mesh.vertices, mesh.triangles[static_cast<std::size_t>(i)],
+                           mesh.triangles[static_cast<std::size_t>(j)]);
   };
   if (grid_pairs(boxes, accept, options.threaded, first_only, out)) return out;
   const TriangleBvh bvh(mesh);

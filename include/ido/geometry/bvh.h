@@ -21,7 +21,8 @@ struct ClosestPoint {
   std::int32_t triangle = -1;  ///< its triangle id, −1 when nothing was found
 };
 
-/// A bounding-volume hierarchy (axis-aligned boxes, median split) over the triangles of a
+/// A bounding-volume hierarchy (axis-aligned boxes; triangles ordered along a Morton curve of
+/// their centroids and halved recursively) over the triangles of a
 /// mesh. It copies the triangle corners it needs, so it does not borrow the mesh: the mesh
 /// may change or die afterwards (the BVH then describes the mesh as it was at
 /// construction). Queries are const and may run concurrently from several threads.
