@@ -206,18 +206,19 @@ bool segment_intersects_triangle(const Vec3& p, const Vec3& q, const Triangle3& 
 
 bool triangles_intersect(const Triangle3& a, const Triangle3& b) {
   if (boxes_disjoint(a, b)) return false;
-  const int a_axis = proper_axis(a[0], a[1], a[2]);
-  const int b_axis = proper_axis(b[0], b[1], b[2]);
-  if (a_axis < 0 || b_axis < 0) return hulls_intersect_3d(a, a_axis, b, b_axis);
+  // Separating planes first: non-zero signs imply the plane's triangle is non-degenerate.
   const std::array<int, 3> db{sgn3(a[0], a[1], a[2], b[0]), sgn3(a[0], a[1], a[2], b[1]),
                               sgn3(a[0], a[1], a[2], b[2])};
   if ((db[0] > 0 && db[1] > 0 && db[2] > 0) || (db[0] < 0 && db[1] < 0 && db[2] < 0)) return false;
-  if (db[0] == 0 && db[1] == 0 && db[2] == 0) {
-    return hulls_intersect_2d(project3(a, a_axis), project3(b, a_axis));
-  }
   const std::array<int, 3> da{sgn3(b[0], b[1], b[2], a[0]), sgn3(b[0], b[1], b[2], a[1]),
                               sgn3(b[0], b[1], b[2], a[2])};
   if ((da[0] > 0 && da[1] > 0 && da[2] > 0) || (da[0] < 0 && da[1] < 0 && da[2] < 0)) return false;
+  const int a_axis = proper_axis(a[0], a[1], a[2]);
+  const int b_axis = proper_axis(b[0], b[1], b[2]);
+  if (a_axis < 0 || b_axis < 0) return hulls_intersect_3d(a, a_axis, b, b_axis);
+  if (db[0] == 0 && db[1] == 0 && db[2] == 0) {
+    return hulls_intersect_2d(project3(a, a_axis), project3(b, a_axis));
+  }
   for (std::size_t i = 0; i < 3; ++i) {
     const std::size_t j = (i + 1) % 3;
     if (segment_triangle_signs(a[i], a[j], da[i], da[j], b, b_axis)) return true;
@@ -227,13 +228,13 @@ bool triangles_intersect(const Triangle3& a, const Triangle3& b) {
 }
 
 bool adjacent_triangles_intersect(const Triangle3& a, const Triangle3& b, int shared) {
-  const int a_axis = proper_axis(a[0], a[1], a[2]);
-  const int b_axis = proper_axis(b[0], b[1], b[2]);
   if (shared >= 3) return true;
   if (shared == 2) {
     const Vec3& u = a[0];
     const Vec3& v = a[1];
     if (orient3d(u, v, a[2], b[2]) != 0.0) return false;
+    const int a_axis = proper_axis(a[0], a[1], a[2]);
+    const int b_axis = proper_axis(b[0], b[1], b[2]);
     int ax = a_axis >= 0 ? a_axis : b_axis;
     if (ax >= 0) {
       return sign_of(orient2d_projected(u, v, a[2], ax)) * sign_of(orient2d_projected(u, v, b[2], ax)) > 0;
@@ -247,6 +248,13 @@ bool adjacent_triangles_intersect(const Triangle3& a, const Triangle3& b, int sh
   }
   if (shared == 1) {
     const Vec3& v = a[0];
+    // If both free corners of one triangle lie strictly on one side of the other's plane,
+    // that triangle meets the plane only at v: nothing else can be shared. (Non-zero signs
+    // also prove the plane's triangle non-degenerate.)
+    if (sgn3(b[0], b[1], b[2], a[1]) * sgn3(b[0], b[1], b[2], a[2]) > 0) return false;
+    if (sgn3(a[0], a[1], a[2], b[1]) * sgn3(a[0], a[1], a[2], b[2]) > 0) return false;
+    const int a_axis = proper_axis(a[0], a[1], a[2]);
+    const int b_axis = proper_axis(b[0], b[1], b[2]);
     if (a_axis >= 0) {  // opposite edge of a against b (it cannot contain v)
       if (b_axis >= 0 ? segment_triangle_proper(a[1], a[2], b, b_axis)
                       : segment_intersects_triangle(a[1], a[2], b)) {
