@@ -13,6 +13,7 @@
 
 #include "ido/core/error.h"
 #include "ido/core/parallel.h"
+#include "ido/meshing/signed_distance.h"
 
 namespace ido::meshing {
 namespace {
@@ -563,6 +564,54 @@ geometry::TetMesh tetrahedralize(const image::Volume<float>& signed_distance_mm,
                            remap[std::size_t(t[2])], remap[std::size_t(t[3])]});
   report(progress, 1.0, "tetrahedralize: done");
   return mesh;
+}
+
+geometry::TetMesh tetrahedralize_surface(const geometry::TriangleMesh& surface,
+                                         const TetrahedralizeOptions& options,
+                                         Progress* progress) {
+  if (surface.triangles.empty())
+    throw InvalidInput("tetrahedralize_surface: the surface has no triangles");
+  if (!std::isfinite(options.edge_mm) || options.edge_mm < 0)
+    throw InvalidInput("tetrahedralize_surface: edge_mm must be a finite length >= 0 (mm)");
+  const auto nv = surface.vertices.size();
+  Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
+  double edge_sum = 0;
+  for (const Tri& t : surface.triangles) {
+    for (int k = 0; k < 3; ++k) {
+      const auto a = t[std::size_t(k)], b = t[std::size_t((k + 1) % 3)];
+      if (a < 0 || std::size_t(a) >= nv || b < 0 || std::size_t(b) >= nv)
+        throw InvalidInput("tetrahedralize_surface: triangle index out of range");
+      edge_sum += (surface.vertices[std::size_t(a)] - surface.vertices[std::size_t(b)]).norm();
+      lo = lo.cwiseMin(surface.vertices[std::size_t(a)]);
+      hi = hi.cwiseMax(surface.vertices[std::size_t(a)]);
+    }
+  }
+  if (!lo.allFinite() || !hi.allFinite())
+    throw InvalidInput("tetrahedralize_surface: the surface has non-finite coordinates");
+  const double h = options.edge_mm > 0 ? options.edge_mm
+                                       : edge_sum / (3.0 * double(surface.triangles.size()));
+  if (!(h > 0)) throw InvalidInput("tetrahedralize_surface: the surface has zero size");
+  const double s = 0.5 * h;
+  const Vec3 origin = lo - Vec3::Constant(2 * h);
+  const Vec3 extent = (hi + Vec3::Constant(2 * h)) - origin;
+  Index3 size;
+  double count = 1;
+  for (int a = 0; a < 3; ++a) {
+    size[std::size_t(a)] = std::int64_t(std::ceil(extent[a] / s)) + 1;
+    count *= double(size[std::size_t(a)]);
+  }
+  if (!(count < 2.0e9))
+    throw InvalidInput("tetrahedralize_surface: edge_mm is too small for this surface");
+  report(progress, 0.0, "tetrahedralize: signed distance of the surface");
+  const image::Volume<float> grid(size, Vec3::Constant(s), origin);
+  SignedDistanceOptions sd;
+  sd.band_mm = 2 * h;
+  sd.threaded = options.threaded;
+  const auto field = signed_distance(surface, grid, sd);
+  check_cancel(progress);
+  TetrahedralizeOptions o = options;
+  o.edge_mm = h;
+  return tetrahedralize(field, o, progress);
 }
 
 }  // namespace ido::meshing

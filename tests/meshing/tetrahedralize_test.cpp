@@ -14,6 +14,7 @@
 
 #include "ido/core/error.h"
 #include "ido/geometry/mesh_checks.h"
+#include "ido/geometry/primitives.h"
 #include "ido/geometry/tet_quality.h"
 #include "ido/meshing/distance_field.h"
 #include "support/test_support.h"
@@ -381,6 +382,22 @@ TEST(Tetrahedralize, MaskInput) {
   EXPECT_EQ(topo.euler, 2);
   const double voxel_volume = double(count) * 0.6 * 0.6 * 0.9;
   EXPECT_TRUE(test::rel_near(quality(mesh).total_volume, voxel_volume, 0.03));
+}
+
+TEST(Tetrahedralize, ClosedSurfaceInput) {
+  const auto sphere_surface = geometry::icosphere(Vec3(1, 2, 3), 8.0, 3);
+  const auto mesh = tetrahedralize_surface(sphere_surface, {.edge_mm = 1.0});
+  expect_stuffing_bounds(mesh);
+  const auto checks = geometry::check_mesh(geometry::tet_boundary(mesh));
+  EXPECT_TRUE(checks.closed && checks.edge_manifold && checks.vertex_manifold && checks.oriented);
+  EXPECT_EQ(checks.genus, std::optional<int>(0));
+  EXPECT_TRUE(test::rel_near(quality(mesh).total_volume, geometry::signed_volume(sphere_surface), 0.01));
+  // default spacing: the surface's mean edge length
+  const auto torus = geometry::torus_surface(Vec3::Zero(), 6.0, 2.0, 40, 14);
+  const auto t = tetrahedralize_surface(torus);
+  expect_stuffing_bounds(t);
+  EXPECT_EQ(geometry::check_mesh(geometry::tet_boundary(t)).genus, std::optional<int>(1));
+  EXPECT_THROW((void)tetrahedralize_surface(geometry::TriangleMesh{}), InvalidInput);
 }
 
 TEST(Tetrahedralize, EmptyRegionGivesEmptyMesh) {

@@ -3,6 +3,7 @@
 
 #include "ido/core/progress.h"
 #include "ido/geometry/tet_mesh.h"
+#include "ido/geometry/triangle_mesh.h"
 #include "ido/image/volume.h"
 
 namespace ido::meshing {
@@ -57,6 +58,18 @@ inline constexpr double kStuffingMaxDihedralDeg = 164.8266;
 [[nodiscard]] geometry::TetMesh tetrahedralize(const image::Volume<float>& signed_distance_mm,
                                                const TetrahedralizeOptions& options = {},
                                                Progress* progress = nullptr);
+
+/// Fills the inside of a closed triangle surface (mm) with tetrahedra: its signed distance
+/// (meshing::signed_distance; inside = generalised winding number > ½, so small defects are
+/// tolerated) is sampled on an axis-aligned grid of spacing h/2 covering the surface's
+/// bounds plus 2h, exact within 2h of the surface, then stuffed as tetrahedralize() does.
+/// edge_mm = 0 takes h = the surface's mean edge length.
+/// @throws ido::InvalidInput for a surface without triangles, an index out of range, a
+///         negative or non-finite edge_mm, or a grid that would exceed 2^31 voxels; as
+///         tetrahedralize() otherwise.
+[[nodiscard]] geometry::TetMesh tetrahedralize_surface(const geometry::TriangleMesh& surface,
+                                                       const TetrahedralizeOptions& options = {},
+                                                       Progress* progress = nullptr);
 
 /// The lattice spacing (mm) tetrahedralize uses for @p field with @p options.
 [[nodiscard]] double stuffing_lattice_spacing(const image::Volume<float>& field,
