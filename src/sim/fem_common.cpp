@@ -38,13 +38,17 @@ double tet_signed_volume(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3
 Mat3 extract_rotation(const Mat3& F, Eigen::Quaterniond& q, int max_iterations) {
   // Müller et al. 2016, Algorithm 1: rotate q by the axis-angle ω that aligns R's columns
   // with F's columns, until ω vanishes.
+  // Stops when the correction angle is below 1e-12 rad, or below 1e-8 rad and no longer
+  // shrinking (round-off floor).
+  double previous = 1e300;
   for (int it = 0; it < max_iterations; ++it) {
     const Mat3 r = q.toRotationMatrix();
     const Vec3 omega = (r.col(0).cross(F.col(0)) + r.col(1).cross(F.col(1)) + r.col(2).cross(F.col(2))) *
                        (1.0 / (std::abs(r.col(0).dot(F.col(0)) + r.col(1).dot(F.col(1)) +
                                         r.col(2).dot(F.col(2))) + 1e-300));
     const double w = omega.norm();
-    if (w < 1e-15) break;
+    if (w < 1e-12 || (w < 1e-8 && w >= previous)) break;
+    previous = w;
     q = Eigen::Quaterniond(Eigen::AngleAxisd(w, omega / w)) * q;
     q.normalize();
   }
