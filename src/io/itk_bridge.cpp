@@ -58,6 +58,9 @@ void silence_itk() {
 std::string itk_problem(const itk::ExceptionObject& e) {
   std::string d = e.GetDescription();
   while (!d.empty() && (d.back() == '\n' || d.back() == ' ')) d.pop_back();
+  // One line: the CLI reports errors as a single line.
+  for (auto& c : d)
+    if (c == '\n' || c == '\r') c = ' ';
   return d.empty() ? std::string("ITK could not process the file") : d;
 }
 
