@@ -13,9 +13,9 @@
 
 #include <algorithm>
 #include <array>
-#include <bit>
 #include <climits>
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 #include <vector>
 
@@ -192,6 +192,10 @@ const CaseTable& table() {
 
 // ---- extraction -------------------------------------------------------------------------
 
+/// Number of set bits of a 3-bit edge mask (no popcnt instruction is assumed).
+constexpr int pop3(unsigned v) { return int((0xE994u >> (2u * (v & 7u))) & 3u); }
+static_assert(pop3(0) == 0 && pop3(5) == 2 && pop3(7) == 3 && pop3(4) == 1);
+
 /// Extraction over a field of voxel type T. `Inside(v)` classifies a voxel value,
 /// `Crossing(v0, v1)` gives the edge parameter t ∈ (0,1) from the first voxel.
 template <class T, class Inside, class Crossing>
@@ -218,14 +222,15 @@ geometry::TriangleMesh extract(const image::Volume<T>& field, bool threaded, Ins
           if (y == 0 || z == 0 || y == Y - 1 || z == Z - 1) continue;
           const T* src = f + field.linear_index(0, y - 1, z - 1);
           std::uint8_t* dst = in.data() + r * std::size_t(X) + 1;
+          // Local copies of the classifier and the bound: stores through uint8_t* may alias
+          // anything, so values read through references would be reloaded every voxel.
+          const Inside cls = inside_of;
+          const std::int64_t count = nx;
+          for (std::int64_t i = 0; i < count; ++i) dst[i] = cls(src[i]) ? 1 : 0;  // vectorises
           std::int32_t rl = INT_MAX / 2, rh = -1;
-          for (std::int64_t i = 0; i < nx; ++i) {
-            const bool v = inside_of(src[i]);
-            dst[i] = v;
-            if (v) {
-              rl = std::min(rl, std::int32_t(i + 1));
-              rh = std::int32_t(i + 1);
-            }
+          if (const void* first = std::memchr(dst, 1, std::size_t(nx))) {
+            rl = std::int32_t(static_cast<const std::uint8_t*>(first) - dst) + 1;
+            rh = std::int32_t(static_cast<const std::uint8_t*>(memrchr(dst, 1, std::size_t(nx))) - dst) + 1;
           }
           lo[r] = rl;
           hi[r] = rh;
@@ -268,29 +273,49 @@ geometry::TriangleMesh extract(const image::Volume<T>& field, bool threaded, Ins
     b = std::min<std::int64_t>(b, X - 2);
   };
 
-  // Pass B: counts.
+  // Pass B: counts. Cube cases are read in a column-major bit order, qcase = q(x) | q(x+1)<<4
+  // with q(x) = r00 | r10<<1 | r01<<2 | r11<<3, and mapped to the table's order by to_case.
+  std::array<std::uint8_t, 256> to_case{}, qtri{};
+  for (unsigned qc = 0; qc < 256; ++qc) {
+    unsigned cs = 0;
+    for (unsigned bit = 0; bit < 8; ++bit)
+      if ((qc >> bit) & 1u) cs |= 1u << ((bit >> 2) + 2 * (bit & 3u));  // corner cx + 2·(cy + 2cz)
+    to_case[qc] = std::uint8_t(cs);
+    qtri[qc] = std::uint8_t(tab.begin[cs + 1] - tab.begin[cs]);
+  }
+  // q(x) of a cube row over [a0, a1 + 1].
+  auto fill_q = [&](std::size_t r, std::int64_t a0, std::int64_t a1, std::uint8_t* q) {
+    const std::uint8_t* r00 = in.data() + r * dy;
+    const std::uint8_t *r10 = r00 + dy, *r01 = r00 + dz, *r11 = r00 + dy + dz;
+    for (std::int64_t x = a0; x <= a1 + 1; ++x)
+      q[x - a0] = std::uint8_t(r00[x] | r10[x] << 1 | r01[x] << 2 | r11[x] << 3);
+  };
+  // Cut-edge bits of voxel row r over [a0, a1].
+  auto fill_e = [&](std::size_t r, std::int64_t a0, std::int64_t a1, std::uint8_t* out) {
+    const std::uint8_t* p = in.data() + r * dy;
+    const std::uint8_t *py = p + dy, *pz = p + dz;
+    for (std::int64_t x = a0; x <= a1; ++x)
+      out[x - a0] = std::uint8_t((p[x] ^ p[x + 1]) | (p[x] ^ py[x]) << 1 | (p[x] ^ pz[x]) << 2);
+  };
   std::vector<std::int64_t> vcount(rows + 1, 0), tcount(rows + 1, 0);
   parallel_for_ranges(
       rows,
       [&](std::size_t b, std::size_t e) {
+        std::vector<std::uint8_t> q(std::size_t(X) + 2);
         for (std::size_t r = b; r < e; ++r) {
           const std::int64_t y = std::int64_t(r) % Y, z = std::int64_t(r) / Y;
           std::int64_t a0, a1;
           edge_range(y, z, a0, a1);
-          std::int64_t nv = 0;
-          for (std::int64_t x = a0; x <= a1; ++x) nv += std::popcount(ebits(r, x));
+          const std::uint8_t* p = in.data() + r * dy;
+          const std::uint8_t *py = p + dy, *pz = p + dz;
+          std::uint32_t nv = 0;
+          for (std::int64_t x = a0; x <= a1; ++x) nv += unsigned(p[x] ^ p[x + 1]) + unsigned(p[x] ^ py[x]) + unsigned(p[x] ^ pz[x]);
           vcount[r] = nv;
           cube_range(y, z, a0, a1);
+          if (a0 > a1) continue;
+          fill_q(r, a0, a1, q.data());
           std::int64_t nt = 0;
-          const std::uint8_t* r00 = in.data() + r * dy;
-          const std::uint8_t *r10 = r00 + dy, *r01 = r00 + dz, *r11 = r00 + dy + dz;
-          for (std::int64_t x = a0; x <= a1; ++x) {
-            const unsigned cs = unsigned(r00[x]) | unsigned(r00[x + 1]) << 1 | unsigned(r10[x]) << 2 |
-                                unsigned(r10[x + 1]) << 3 | unsigned(r01[x]) << 4 |
-                                unsigned(r01[x + 1]) << 5 | unsigned(r11[x]) << 6 |
-                                unsigned(r11[x + 1]) << 7;
-            nt += tab.begin[cs + 1] - tab.begin[cs];
-          }
+          for (std::int64_t x = 0; x <= a1 - a0; ++x) nt += qtri[unsigned(q[std::size_t(x)]) | unsigned(q[std::size_t(x) + 1]) << 4];
           tcount[r] = nt;
         }
       },
@@ -317,21 +342,24 @@ geometry::TriangleMesh extract(const image::Volume<T>& field, bool threaded, Ins
   parallel_for_ranges(
       rows,
       [&](std::size_t b, std::size_t e) {
+        std::vector<std::uint8_t> q(std::size_t(X) + 2), eb[4];
+        for (auto& v : eb) v.resize(std::size_t(X) + 2);
         for (std::size_t r = b; r < e; ++r) {
           const std::int64_t y = std::int64_t(r) % Y, z = std::int64_t(r) / Y;
           std::int64_t a0, a1;
           edge_range(y, z, a0, a1);
           std::int64_t id = vcount[r];
+          if (a0 <= a1) fill_e(r, a0, a1, eb[0].data());
           for (std::int64_t x = a0; x <= a1; ++x) {
-            const unsigned bits = ebits(r, x);
+            const unsigned bits = eb[0][std::size_t(x - a0)];
             if (!bits) continue;
             const Vec3 p(double(x - 1), double(y - 1), double(z - 1));  // grid index
             const bool p_in_grid = x >= 1 && x <= nx && y >= 1 && y <= ny && z >= 1 && z <= nz;
             for (int ax = 0; ax < 3; ++ax) {
               if (!((bits >> ax) & 1)) continue;
               double t = 0.5;
-              const std::int64_t q[3] = {x + (ax == 0), y + (ax == 1), z + (ax == 2)};
-              const bool q_in_grid = q[0] <= nx && q[1] <= ny && q[2] <= nz;
+              const std::int64_t qq[3] = {x + (ax == 0), y + (ax == 1), z + (ax == 2)};
+              const bool q_in_grid = qq[0] <= nx && qq[1] <= ny && qq[2] <= nz;
               if (p_in_grid && q_in_grid) {
                 const std::size_t lp = field.linear_index(x - 1, y - 1, z - 1);
                 t = crossing(f[lp], f[lp + std::size_t(dgrid[ax])]);
@@ -346,26 +374,21 @@ geometry::TriangleMesh extract(const image::Volume<T>& field, bool threaded, Ins
           if (a0 > a1) continue;
           const std::size_t rows4[4] = {r, r + 1, r + std::size_t(Y), r + std::size_t(Y) + 1};
           std::int64_t cnt[4];
-          unsigned eb_lo[4], eb_hi[4];
           for (int n = 0; n < 4; ++n) {
             // Rank of the first edge at x = a0 in each of the four voxel rows.
             std::int64_t ra0, ra1;
             edge_range((y + (n & 1)), z + (n >> 1), ra0, ra1);
             cnt[n] = vcount[rows4[n]];
-            for (std::int64_t x = ra0; x < a0 && x <= ra1; ++x) cnt[n] += std::popcount(ebits(rows4[n], x));
-            eb_lo[n] = ebits(rows4[n], a0);
+            for (std::int64_t x = ra0; x < a0 && x <= ra1; ++x) cnt[n] += pop3(ebits(rows4[n], x));
+            fill_e(rows4[n], a0, a1 + 1, eb[std::size_t(n)].data());
           }
+          fill_q(r, a0, a1, q.data());
           std::size_t tout = std::size_t(tcount[r]);
-          const std::uint8_t* r00 = in.data() + r * dy;
-          const std::uint8_t *r10 = r00 + dy, *r01 = r00 + dz, *r11 = r00 + dy + dz;
           for (std::int64_t x = a0; x <= a1; ++x) {
-            for (int n = 0; n < 4; ++n) eb_hi[n] = ebits(rows4[n], x + 1);
-            const unsigned cs = unsigned(r00[x]) | unsigned(r00[x + 1]) << 1 | unsigned(r10[x]) << 2 |
-                                unsigned(r10[x + 1]) << 3 | unsigned(r01[x]) << 4 |
-                                unsigned(r01[x + 1]) << 5 | unsigned(r11[x]) << 6 |
-                                unsigned(r11[x + 1]) << 7;
-            const unsigned tb = tab.begin[cs], te = tab.begin[cs + 1];
-            if (tb != te) {
+            const std::size_t u = std::size_t(x - a0);
+            const unsigned qc = unsigned(q[u]) | unsigned(q[u + 1]) << 4;
+            if (qtri[qc]) {
+              const unsigned cs = to_case[qc];
               std::int32_t eid[12];
               const unsigned mask = tab.edge_mask[cs];
               for (int ce = 0; ce < 12; ++ce) {
@@ -373,21 +396,19 @@ geometry::TriangleMesh extract(const image::Volume<T>& field, bool threaded, Ins
                 const EdgeDef d = kEdges[std::size_t(ce)];
                 const int n = (d.corner >> 1) & 3;
                 const bool xo = d.corner & 1;
+                const unsigned lo_bits = eb[std::size_t(n)][u], hi_bits = eb[std::size_t(n)][u + 1];
                 const unsigned below = (1u << d.axis) - 1u;
-                eid[ce] = std::int32_t(cnt[n] + (xo ? std::popcount(eb_lo[n]) : 0) +
-                                       std::popcount((xo ? eb_hi[n] : eb_lo[n]) & below));
+                eid[ce] = std::int32_t(cnt[n] + (xo ? pop3(lo_bits) : 0) +
+                                       pop3((xo ? hi_bits : lo_bits) & below));
               }
-              for (unsigned k = tb; k < te; ++k) {
+              for (unsigned k = tab.begin[cs]; k < tab.begin[cs + 1]; ++k) {
                 const auto& tri = tab.tris[k];
                 Tri out{eid[tri[0]], eid[tri[1]], eid[tri[2]]};
                 if (flip) std::swap(out[1], out[2]);
                 mesh.triangles[tout++] = out;
               }
             }
-            for (int n = 0; n < 4; ++n) {
-              cnt[n] += std::popcount(eb_lo[n]);
-              eb_lo[n] = eb_hi[n];
-            }
+            for (int n = 0; n < 4; ++n) cnt[n] += pop3(unsigned(eb[std::size_t(n)][u]));
           }
         }
       },
