@@ -75,6 +75,7 @@ geometry::TriangleMesh parse_ply(std::string_view bytes, const std::string& name
   bool have_format = false;
   std::vector<Element> elements;
   while (true) {
+    if (hdr.at_end()) hdr.fail("header ends without an 'end_header' line");
     const auto key = hdr.next_on_line();
     if (key == "end_header") break;
     if (key == "format") {
@@ -142,6 +143,12 @@ geometry::TriangleMesh parse_ply(std::string_view bytes, const std::string& name
       throw IoError(name, "vertex element lacks x, y or z", {.line = e.line, .byte_offset = std::nullopt});
     if (is_face && face_list < 0)
       throw IoError(name, "face element has no vertex_indices list", {.line = e.line, .byte_offset = std::nullopt});
+    // Every instance of an element with properties takes at least one byte: larger counts
+    // cannot be satisfied (and would spin); property-less elements hold nothing to read.
+    if (!e.properties.empty() && static_cast<std::uint64_t>(e.count) > bytes.size())
+      throw IoError(name, fmt::format("element '{}' declares {} entries, more than the file can hold", e.name, e.count),
+                    {.line = e.line, .byte_offset = std::nullopt});
+    if (e.properties.empty()) continue;
     if (is_vertex) mesh.vertices.reserve(static_cast<std::size_t>(e.count));
     for (std::int64_t i = 0; i < e.count; ++i) {
       Vec3 p = Vec3::Zero();
