@@ -87,7 +87,8 @@ namespace {
 
 // Child c of a node with vertex-pair codes `codes` (3 pairs in the node's local indices, on
 // the node's face g): finds the child slot, its face on g, and its local index per code.
-bool find_child_face(int g, const std::array<int, 3>& codes, int& child, int& child_face, std::array<int, 3>& local) {
+bool find_child_face_search(int g, const std::array<int, 3>& codes, int& child, int& child_face,
+                            std::array<int, 3>& local) {
   const TreeTable& t = TreeTable::get();
   for (int c = 0; c < 8; ++c)
     for (int cg = 0; cg < 4; ++cg) {
@@ -112,78 +113,93 @@ bool find_child_face(int g, const std::array<int, 3>& codes, int& child, int& ch
   return false;
 }
 
+// find_child_face_search tabulated once over every (face, code, code, code) combination
+// (pair codes are < 16), so the v_list walk does a single look-up.
+struct ChildFaceTable {
+  struct Entry {
+    std::int8_t child = -1, child_face = -1;
+    std::array<std::int8_t, 3> local{};
+  };
+  std::vector<Entry> e;
+  ChildFaceTable() : e(4 * 16 * 16 * 16) {
+    for (int g = 0; g < 4; ++g)
+      for (int a = 0; a < 16; ++a)
+        for (int b = 0; b < 16; ++b)
+          for (int c = 0; c < 16; ++c) {
+            int ch = -1, cf = -1;
+            std::array<int, 3> loc{};
+            if (!find_child_face_search(g, {a, b, c}, ch, cf, loc)) continue;
+            auto& x = e[static_cast<std::size_t>(((g * 16 + a) * 16 + b) * 16 + c)];
+            x.child = static_cast<std::int8_t>(ch);
+            x.child_face = static_cast<std::int8_t>(cf);
+            for (std::size_t i = 0; i < 3; ++i) x.local[i] = static_cast<std::int8_t>(loc[i]);
+          }
+  }
+};
+
+bool find_child_face(int g, const std::array<int, 3>& codes, int& child, int& child_face, std::array<int, 3>& local) {
+  static const ChildFaceTable table;
+  if (g < 0 || g > 3) return false;
+  for (const int c : codes)
+    if (c < 0 || c > 15) return false;
+  const auto& x = table.e[static_cast<std::size_t>(((g * 16 + codes[0]) * 16 + codes[1]) * 16 + codes[2])];
+  if (x.child < 0) return false;
+  child = x.child;
+  child_face = x.child_face;
+  for (std::size_t i = 0; i < 3; ++i) local[i] = x.local[i];
+  return true;
+}
+
 }  // namespace
 
-// Memo of across() within one v_list rebuild (siblings share their parents' answers).
-struct AcrossCache {
-  struct Key {
-    std::uint32_t root, path;
-    std::uint8_t depth, face;
-    friend bool operator==(const Key&, const Key&) = default;
-  };
-  struct KeyHash {
-    std::size_t operator()(const Key& k) const noexcept {
-      std::uint64_t x = (static_cast<std::uint64_t>(k.root) << 32) ^ (static_cast<std::uint64_t>(k.path) << 6) ^
-                        (static_cast<std::uint64_t>(k.depth) << 2) ^ k.face;
-      x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
-      x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
-      return static_cast<std::size_t>(x ^ (x >> 31));
-    }
-  };
-  std::unordered_map<Key, Across, KeyHash> map;
-};
+// Scratch of the v_list rebuild (kept so the header's layout stays; the top-down walk
+// below needs no memo: each node's face neighbours are derived from its parent's).
+struct AcrossCache {};
 
 namespace {
 
-Across across_uncached(const TetHierarchy& h, const NodeRef& n, int f, AcrossCache& cache);
-
-Across across(const TetHierarchy& h, const NodeRef& n, int f, AcrossCache& cache) {
-  if (n.depth == 0) return across_uncached(h, n, f, cache);
-  const AcrossCache::Key key{n.root, n.path, n.depth, static_cast<std::uint8_t>(f)};
-  const auto it = cache.map.find(key);
-  if (it != cache.map.end()) return it->second;
-  const Across a = across_uncached(h, n, f, cache);
-  cache.map.emplace(key, a);
+// What lies across face f of root n.
+Across root_across(const TetHierarchy& h, std::uint32_t r, int f) {
+  const auto nb = h.root_neighbor(r, f);
+  if (nb.root < 0) return {true, {}, -1, {}};
+  Across a{false, NodeRef{static_cast<std::uint32_t>(nb.root), 0, 0}, nb.face, {-1, -1, -1, -1}};
+  const Tet& mine = h.root_tet(r);
+  const Tet& other = h.root_tet(static_cast<std::size_t>(nb.root));
+  for (std::size_t k = 0; k < 4; ++k)
+    for (std::size_t k2 = 0; k2 < 4; ++k2)
+      if (mine[k] == other[k2]) a.vmap[k] = static_cast<int>(k2);
   return a;
 }
 
-Across across_uncached(const TetHierarchy& h, const NodeRef& n, int f, AcrossCache& cache) {
-  if (n.depth == 0) {
-    const auto nb = h.root_neighbor(n.root, f);
-    if (nb.root < 0) return {true, {}, -1, {}};
-    Across a{false, NodeRef{static_cast<std::uint32_t>(nb.root), 0, 0}, nb.face, {-1, -1, -1, -1}};
-    const Tet& mine = h.root_tet(n.root);
-    const Tet& other = h.root_tet(static_cast<std::size_t>(nb.root));
-    for (std::size_t k = 0; k < 4; ++k)
-      for (std::size_t k2 = 0; k2 < 4; ++k2)
-        if (mine[k] == other[k2]) a.vmap[k] = static_cast<int>(k2);
-    return a;
-  }
+// What lies across face f of child slot s of node p, given what lies across each face of p
+// (`pacr`) and the state of the node across p's faces (`pstate`).
+Across child_across(const NodeRef& p, int s, int f, const std::array<Across, 4>& pacr,
+                    const std::array<NodeState, 4>& pstate) {
   const TreeTable& t = TreeTable::get();
-  const auto s = static_cast<std::size_t>(n.slot(n.depth));
-  const auto link = t.face_link[s][static_cast<std::size_t>(f)];
-  const NodeRef p = n.parent();
+  const auto su = static_cast<std::size_t>(s);
+  const auto link = t.face_link[su][static_cast<std::size_t>(f)];
   if (link.sibling >= 0) {
     Across a{false, p.child(link.sibling), link.sibling_face, {-1, -1, -1, -1}};
     const auto s2 = static_cast<std::size_t>(link.sibling);
     for (std::size_t k = 0; k < 4; ++k) {
       if (static_cast<int>(k) == f) continue;
-      const int code = pair_code(t.vertex[s][k][0], t.vertex[s][k][1]);
+      const int code = pair_code(t.vertex[su][k][0], t.vertex[su][k][1]);
       for (std::size_t k2 = 0; k2 < 4; ++k2)
         if (pair_code(t.vertex[s2][k2][0], t.vertex[s2][k2][1]) == code) a.vmap[k] = static_cast<int>(k2);
     }
     return a;
   }
-  const Across pa = across(h, p, link.parent_face, cache);
+  const auto pf = static_cast<std::size_t>(link.parent_face);
+  const Across& pa = pacr[pf];
   if (pa.boundary) return pa;
-  if (pa.node.depth < p.depth || h.state(pa.node) != NodeState::Internal) return pa;  // a coarser leaf
+  if (pa.node.depth < p.depth || pstate[pf] != NodeState::Internal) return pa;  // a coarser leaf
   // Same depth as the parent and refined: the child of pa.node holding our face.
   std::array<int, 3> codes{};
   std::array<std::size_t, 3> ks{};
   int i = 0;
   for (std::size_t k = 0; k < 4; ++k) {
     if (static_cast<int>(k) == f) continue;
-    codes[static_cast<std::size_t>(i)] = pair_code(pa.vmap[t.vertex[s][k][0]], pa.vmap[t.vertex[s][k][1]]);
+    codes[static_cast<std::size_t>(i)] = pair_code(pa.vmap[t.vertex[su][k][0]], pa.vmap[t.vertex[su][k][1]]);
     ks[static_cast<std::size_t>(i++)] = k;
   }
   int c = -1, cg = -1;
@@ -296,38 +312,78 @@ void BoundarySurface::update(const TetHierarchy& hierarchy, std::span<const std:
   }
 }
 
+namespace {
+
+// Emits the visible faces of the full leaves of the subtree of n (state st, face
+// neighbours acr with states ast), walking top-down so every node's neighbours come from
+// its parent's in O(1).
+// NOLINTNEXTLINE(misc-no-recursion): depth ≤ kMaxDepth
+void visit(const TetHierarchy& h, std::size_t r, const NodeRef& n, NodeState st, const std::array<Across, 4>& acr,
+           const std::array<NodeState, 4>& ast, std::vector<SurfaceFace>& out) {
+  if (st == NodeState::Erased) return;
+  if (st == NodeState::Internal) {
+    for (int c = 0; c < 8; ++c) {
+      const NodeRef ch = n.child(c);
+      std::array<Across, 4> cacr;
+      std::array<NodeState, 4> cst{};
+      for (int f = 0; f < 4; ++f) {
+        const auto fu = static_cast<std::size_t>(f);
+        cacr[fu] = child_across(n, c, f, acr, ast);
+        if (cacr[fu].boundary) {
+          cst[fu] = NodeState::Erased;
+        } else if (cacr[fu].node.depth < ch.depth) {
+          // The parent's own neighbour (a leaf no finer than the parent): its state is known.
+          cst[fu] = ast[static_cast<std::size_t>(TreeTable::get().face_link[static_cast<std::size_t>(c)][fu].parent_face)];
+        } else {
+          cst[fu] = h.state(cacr[fu].node);
+        }
+      }
+      visit(h, r, ch, h.state(ch), cacr, cst, out);
+    }
+    return;
+  }
+  NodeGeometry g;
+  bool have_geometry = false;
+  for (int f = 0; f < 4; ++f) {
+    const auto fu = static_cast<std::size_t>(f);
+    const Across& a = acr[fu];
+    const NodeState other = ast[fu];
+    if (other == NodeState::Full) continue;
+    if (!have_geometry) {
+      g = h.geometry(n);
+      have_geometry = true;
+    }
+    std::array<int, 3> order{kFaceVerts[f][0], kFaceVerts[f][1], kFaceVerts[f][2]};
+    if (g.flipped) std::swap(order[1], order[2]);
+    std::array<PointKey, 3> keys;
+    std::array<int, 3> loc{};
+    for (std::size_t i = 0; i < 3; ++i) {
+      keys[i] = point_key(h, r, g.vertex[static_cast<std::size_t>(order[i])]);
+      loc[i] = a.vmap[static_cast<std::size_t>(order[i])];
+    }
+    if (other == NodeState::Erased) {
+      out.push_back(keys);
+    } else {
+      emit_against(h, keys, loc, a.node, a.face, out);
+    }
+  }
+}
+
+}  // namespace
+
 void BoundarySurface::rebuild_root(const TetHierarchy& hierarchy, std::size_t r) {
   auto& out = m_faces[r];
   out.clear();
-  AcrossCache& cache = *m_cache;
-  cache.map.clear();
-  hierarchy.for_each_leaf(r, [&](const NodeRef& n, NodeState st) {
-    if (st != NodeState::Full) return;
-    NodeGeometry g;
-    bool have_geometry = false;
-    for (int f = 0; f < 4; ++f) {
-      const Across a = across(hierarchy, n, f, cache);
-      const NodeState other = a.boundary ? NodeState::Erased : hierarchy.state(a.node);
-      if (other == NodeState::Full) continue;
-      if (!have_geometry) {
-        g = hierarchy.geometry(n);
-        have_geometry = true;
-      }
-      std::array<int, 3> order{kFaceVerts[f][0], kFaceVerts[f][1], kFaceVerts[f][2]};
-      if (g.flipped) std::swap(order[1], order[2]);
-      std::array<PointKey, 3> keys;
-      std::array<int, 3> loc{};
-      for (std::size_t i = 0; i < 3; ++i) {
-        keys[i] = point_key(hierarchy, r, g.vertex[static_cast<std::size_t>(order[i])]);
-        loc[i] = a.vmap[static_cast<std::size_t>(order[i])];
-      }
-      if (other == NodeState::Erased) {
-        out.push_back(keys);
-      } else {
-        emit_against(hierarchy, keys, loc, a.node, a.face, out);
-      }
-    }
-  });
+  const auto ru = static_cast<std::uint32_t>(r);
+  std::array<Across, 4> acr;
+  std::array<NodeState, 4> ast{};
+  for (int f = 0; f < 4; ++f) {
+    const auto fu = static_cast<std::size_t>(f);
+    acr[fu] = root_across(hierarchy, ru, f);
+    ast[fu] = acr[fu].boundary ? NodeState::Erased : hierarchy.state(acr[fu].node);
+  }
+  const NodeRef root{ru, 0, 0};
+  visit(hierarchy, r, root, hierarchy.state(root), acr, ast, out);
 }
 
 geometry::TriangleMesh assemble_surface(std::span<const std::vector<SurfaceFace>> v_lists,

@@ -32,6 +32,26 @@ bool sphere_misses_tet(const std::array<Vec3, 4>& x, const Vec3& c, double r) {
   return false;
 }
 
+// True when erosion would remove anything from a full node of geometry x at depth `depth`
+// (finest level `finest`) without touching the tree: the same decisions as
+// Eroder::process on a full leaf, evaluated on derived geometry only, so a partly covered
+// leaf is refined only when a descendant will actually go (no refine-then-undo).
+bool would_remove(const std::array<Vec3, 4>& x, int depth, int finest, const Vec3& c, double r) {
+  if (sphere_misses_tet(x, c, r)) return false;
+  const double r2 = r * r;
+  bool all_inside = true;
+  for (const auto& v : x) all_inside = all_inside && (v - c).squaredNorm() <= r2;
+  if (all_inside) return true;
+  if (depth >= finest) return (0.25 * (x[0] + x[1] + x[2] + x[3]) - c).squaredNorm() <= r2;
+  const TreeTable& t = TreeTable::get();
+  for (std::size_t s = 0; s < 8; ++s) {
+    std::array<Vec3, 4> ch;
+    for (std::size_t k = 0; k < 4; ++k) ch[k] = 0.5 * (x[t.vertex[s][k][0]] + x[t.vertex[s][k][1]]);
+    if (would_remove(ch, depth + 1, finest, c, r)) return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 Eroder::Eroder(const ErosionOptions& options) : m_options(options) {
@@ -110,6 +130,9 @@ bool Eroder::process(TetHierarchy& h, const NodeRef& node, const std::array<Vec3
   // Partly covered, above the finest level: descend.
   bool refined_here = false;
   if (st == NodeState::Full) {
+    // Decide before refining: a partly covered full leaf none of whose descendants would
+    // go stays a leaf.
+    if (node.depth >= kMaxDepth || !would_remove(x, node.depth, finest, m_centre, m_radius)) return true;
     if (!h.refine(node)) return true;
     refined_here = true;
     ++stats.nodes_refined;
