@@ -1,16 +1,18 @@
 // SPDX-License-Identifier: Apache-2.0
-// Narrow-band signed distance with a hierarchical generalised winding number for the sign.
-// Written by hand for ido (see the header for the papers followed).
+// Narrow-band signed distance; the sign comes from geometry::WindingNumber (hierarchical
+// generalised winding number). Written by hand for ido (see the header for the papers).
 #include "ido/meshing/signed_distance.h"
 
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <string>
 
 #include "ido/core/error.h"
 #include "ido/core/parallel.h"
+#include "ido/geometry/winding_number.h"
 
 namespace ido::meshing {
 
@@ -33,135 +35,6 @@ Vec3 closest_point_on_triangle_mm(const Vec3& p, const Vec3& a, const Vec3& b, c
     return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
   const double denom = 1.0 / (va + vb + vc);
   return a + ab * (vb * denom) + ac * (vc * denom);
-}
-
-namespace {
-
-// Solid angle of triangle (a, b, c) seen from the origin (Van Oosterom & Strackee 1983).
-double solid_angle(const Vec3& a, const Vec3& b, const Vec3& c) {
-  const double la = a.norm(), lb = b.norm(), lc = c.norm();
-  const double num = a.dot(b.cross(c));
-  const double den = la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb;
-  return 2.0 * std::atan2(num, den);
-}
-
-}  // namespace
-
-struct FastWindingNumber::Tree {
-  struct Node {
-    Vec3 lo, hi;
-    Vec3 centre;       // area-weighted centroid
-    Vec3 area_normal;  // Σ ½ (b−a)×(c−a)
-    double radius = 0; // max distance from centre to the node's triangle vertices
-    std::int32_t left = -1, right = -1;
-    std::int32_t begin = 0, end = 0;  // triangle range in `order` (leaves)
-  };
-  std::vector<Vec3> vertices;
-  std::vector<Tri> triangles;
-  std::vector<std::int32_t> order;
-  std::vector<Node> nodes;
-  double beta = 2.0;
-
-  std::int32_t build(std::int32_t begin, std::int32_t end, const std::vector<Vec3>& centroids) {
-    Node node;
-    node.begin = begin;
-    node.end = end;
-    node.lo = Vec3::Constant(INFINITY);
-    node.hi = Vec3::Constant(-INFINITY);
-    Vec3 weighted = Vec3::Zero();
-    double area_sum = 0;
-    node.area_normal = Vec3::Zero();
-    for (std::int32_t i = begin; i < end; ++i) {
-      const Tri& t = triangles[order[i]];
-      const Vec3 &a = vertices[t[0]], &b = vertices[t[1]], &c = vertices[t[2]];
-      const Vec3 an = 0.5 * (b - a).cross(c - a);
-      node.area_normal += an;
-      const double ar = an.norm();
-      weighted += ar * centroids[order[i]];
-      area_sum += ar;
-      for (const Vec3* v : {&a, &b, &c}) {
-        node.lo = node.lo.cwiseMin(*v);
-        node.hi = node.hi.cwiseMax(*v);
-      }
-    }
-    node.centre = area_sum > 0 ? Vec3(weighted / area_sum) : Vec3(0.5 * (node.lo + node.hi));
-    double r2 = 0;
-    for (std::int32_t i = begin; i < end; ++i)
-      for (std::int32_t v : triangles[order[i]]) r2 = std::max(r2, (vertices[v] - node.centre).squaredNorm());
-    node.radius = std::sqrt(r2);
-    const auto id = static_cast<std::int32_t>(nodes.size());
-    nodes.push_back(node);
-    if (end - begin > 8) {
-      Vec3 clo = Vec3::Constant(INFINITY), chi = Vec3::Constant(-INFINITY);
-      for (std::int32_t i = begin; i < end; ++i) {
-        clo = clo.cwiseMin(centroids[order[i]]);
-        chi = chi.cwiseMax(centroids[order[i]]);
-      }
-      int axis = 0;
-      (chi - clo).maxCoeff(&axis);
-      const std::int32_t mid = (begin + end) / 2;
-      std::nth_element(order.begin() + begin, order.begin() + mid, order.begin() + end,
-                       [&](std::int32_t x, std::int32_t y) { return centroids[x][axis] < centroids[y][axis]; });
-      const std::int32_t l = build(begin, mid, centroids);
-      const std::int32_t r = build(mid, end, centroids);
-      nodes[id].left = l;
-      nodes[id].right = r;
-    }
-    return id;
-  }
-
-  double eval(const Vec3& p) const {
-    double sum = 0;
-    std::int32_t stack[128];
-    int top = 0;
-    stack[top++] = 0;
-    while (top > 0) {
-      const Node& n = nodes[stack[--top]];
-      const Vec3 d = n.centre - p;
-      const double dist = d.norm();
-      if (dist > beta * n.radius && n.left >= 0) {
-        sum += n.area_normal.dot(d) / (dist * dist * dist);
-        continue;
-      }
-      if (n.left < 0) {
-        for (std::int32_t i = n.begin; i < n.end; ++i) {
-          const Tri& t = triangles[order[i]];
-          sum += solid_angle(vertices[t[0]] - p, vertices[t[1]] - p, vertices[t[2]] - p);
-        }
-        continue;
-      }
-      stack[top++] = n.left;
-      stack[top++] = n.right;
-    }
-    return sum / (4.0 * kPi);
-  }
-};
-
-FastWindingNumber::FastWindingNumber(const geometry::TriangleMesh& mesh, double beta)
-    : m_tree(std::make_unique<Tree>()) {
-  m_tree->vertices = mesh.vertices;
-  m_tree->triangles = mesh.triangles;
-  m_tree->beta = beta;
-  const auto nv = static_cast<std::int32_t>(mesh.vertices.size());
-  for (const Tri& t : mesh.triangles)
-    for (std::int32_t v : t)
-      if (v < 0 || v >= nv) throw InvalidInput("winding number: triangle vertex index out of range");
-  std::vector<Vec3> centroids(mesh.triangles.size());
-  for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
-    const Tri& t = mesh.triangles[i];
-    centroids[i] = (mesh.vertices[t[0]] + mesh.vertices[t[1]] + mesh.vertices[t[2]]) / 3.0;
-  }
-  m_tree->order.resize(mesh.triangles.size());
-  std::iota(m_tree->order.begin(), m_tree->order.end(), 0);
-  if (!mesh.triangles.empty()) m_tree->build(0, static_cast<std::int32_t>(mesh.triangles.size()), centroids);
-}
-FastWindingNumber::FastWindingNumber(FastWindingNumber&&) noexcept = default;
-FastWindingNumber& FastWindingNumber::operator=(FastWindingNumber&&) noexcept = default;
-FastWindingNumber::~FastWindingNumber() = default;
-
-double FastWindingNumber::at(const Vec3& point_mm) const {
-  if (m_tree->nodes.empty()) return 0.0;
-  return m_tree->eval(point_mm);
 }
 
 image::Volume<float> signed_distance(const geometry::TriangleMesh& surface,
@@ -235,7 +108,7 @@ image::Volume<float> signed_distance(const geometry::TriangleMesh& surface,
       options.threaded, 1);
 
   // Sign: winding number at band voxels; one evaluation per connected far component.
-  const FastWindingNumber winding(surface, options.winding_beta);
+  const geometry::WindingNumber winding(surface, {.beta = options.winding_beta});
   const auto total = static_cast<std::int64_t>(dist.size());
   const float fband = static_cast<float>(band);
   parallel_for(
@@ -246,7 +119,9 @@ image::Volume<float> signed_distance(const geometry::TriangleMesh& surface,
         const std::int64_t j = (std::int64_t(idx) / n[0]) % n[1];
         const std::int64_t k = std::int64_t(idx) / (n[0] * n[1]);
         const Vec3 p = grid.index_to_world(Vec3(double(i), double(j), double(k)));
-        if (winding.at(p) > 0.5) dist[idx] = -dist[idx];
+        // Inside is strictly negative, also at a grid point lying on a counted triangle
+        // (distance 0), so a zero-level extraction never sees an inside point as outside.
+        if (winding.at(p) > 0.5) dist[idx] = -std::max(dist[idx], std::numeric_limits<float>::min());
       },
       options.threaded, 1024);
   std::vector<std::uint8_t> seen(dist.size(), 0);

@@ -12,6 +12,8 @@
 #include "ido/core/error.h"
 #include "ido/core/log.h"
 #include "ido/core/parallel.h"
+#include "ido/geometry/mesh_checks.h"
+#include "ido/geometry/self_intersection.h"
 #include "ido/image/filters.h"
 #include "ido/meshing/remesh.h"
 #include "ido/meshing/signed_distance.h"
@@ -155,7 +157,7 @@ struct Balloon::State {
   }
   // Handles intersections: freeze the vertices involved, then rebuild the surface.
   void handle_intersections() {
-    const auto pairs = find_self_intersections(mesh(), opt.threaded);
+    const auto pairs = geometry::self_intersections(mesh(), {.threaded = opt.threaded});
     if (pairs.empty()) return;
     for (const auto& [a, b] : pairs)
       for (std::int32_t t : {a, b})
@@ -357,25 +359,25 @@ BalloonResult Balloon::run(Progress* progress) {
   }
   // Final guarantee: no self-intersection. A repair without remeshing gives the zero level
   // of a signed distance, which cannot intersect itself.
-  auto pairs = find_self_intersections(s.mesh(), s.opt.threaded);
+  auto pairs = geometry::self_intersections(s.mesh(), {.threaded = s.opt.threaded});
   if (!pairs.empty()) {
     s.repair(pairs, true);
-    pairs = find_self_intersections(s.mesh(), s.opt.threaded);
+    pairs = geometry::self_intersections(s.mesh(), {.threaded = s.opt.threaded});
     if (!pairs.empty()) {
       s.repair(pairs, false);
-      pairs = find_self_intersections(s.mesh(), s.opt.threaded);
+      pairs = geometry::self_intersections(s.mesh(), {.threaded = s.opt.threaded});
     }
   }
   BalloonResult out;
   out.surface = s.mesh();
-  const SurfaceCheck c = check_surface(out.surface);
+  const geometry::MeshCheckReport c = geometry::check_mesh(out.surface);
   BalloonReport& r = s.report;
   r.iterations = s.iteration;
-  r.volume_mm3 = c.volume_mm3;
+  r.volume_mm3 = c.signed_volume_mm3;
   r.area_mm2 = c.area_mm2;
-  r.vertices = c.vertices;
-  r.edges = c.edges;
-  r.triangles = c.triangles;
+  r.vertices = static_cast<std::int64_t>(c.vertices);
+  r.edges = static_cast<std::int64_t>(c.edges);
+  r.triangles = static_cast<std::int64_t>(c.triangles);
   r.euler_characteristic = c.euler_characteristic;
   r.components = c.components;
   r.closed = c.closed;

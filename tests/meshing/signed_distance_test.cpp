@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "ido/core/error.h"
+#include "ido/geometry/winding_number.h"
 #include "support/test_support.h"
 
 namespace ido::meshing {
@@ -59,13 +60,14 @@ TEST(ClosestPointOnTriangle, MatchesDenseSampling) {
   }
 }
 
-TEST(FastWindingNumber, InsideOneOutsideZeroOverlapTwo) {
+// The sign of signed_distance relies on geometry::WindingNumber counting overlaps twice.
+TEST(SignedDistanceWinding, InsideOneOutsideZeroOverlapTwo) {
   geometry::TriangleMesh m = sphere(Vec3::Zero(), 5.0, 4);
   const auto second = sphere(Vec3(4, 0, 0), 5.0, 4);
   const auto base = static_cast<std::int32_t>(m.vertices.size());
   m.vertices.insert(m.vertices.end(), second.vertices.begin(), second.vertices.end());
   for (const Tri& t : second.triangles) m.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
-  const FastWindingNumber w(m);
+  const geometry::WindingNumber w(m);
   EXPECT_TRUE(test::near(w.at(Vec3(-3, 0, 0)), 1.0, 0.02));
   EXPECT_TRUE(test::near(w.at(Vec3(2, 0, 0)), 2.0, 0.02));
   EXPECT_TRUE(test::near(w.at(Vec3(7, 1, 0)), 1.0, 0.02));

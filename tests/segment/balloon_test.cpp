@@ -8,6 +8,8 @@
 #include <gtest/gtest.h>
 
 #include "ido/core/error.h"
+#include "ido/geometry/mesh_checks.h"
+#include "ido/geometry/self_intersection.h"
 #include "ido/segment/balloon_forces.h"
 #include "ido/segment/intensity_model.h"
 #include "ido/segment/topology_repair.h"
@@ -109,9 +111,10 @@ void expect_valid(const BalloonResult& r, std::int64_t euler) {
   EXPECT_TRUE(r.report.oriented);
   EXPECT_EQ(r.report.self_intersections, 0);
   EXPECT_EQ(r.report.euler_characteristic, euler);
-  const auto c = check_surface(r.surface);
+  const auto c = geometry::check_mesh(r.surface);
   EXPECT_TRUE(c.closed && c.edge_manifold && c.vertex_manifold && c.oriented);
-  EXPECT_TRUE(find_self_intersections(r.surface).empty());
+  EXPECT_EQ(c.euler_characteristic, euler);
+  EXPECT_FALSE(geometry::has_self_intersections(r.surface));
 }
 
 TEST(Balloon, InflatesToSphereWall) {
@@ -157,6 +160,51 @@ TEST(Balloon, OneVoxelGapStopsTheSurface) {
   const double box = 11.0 * 11.0 * 11.0;
   EXPECT_LT(r.report.volume_mm3, 1.15 * box);
   EXPECT_GT(r.report.volume_mm3, 0.85 * box);
+}
+
+// Overlapping closed spheres (a self-intersecting surface) → one closed, exact-checked
+// surface of the union; a ring of overlapping spheres → a torus (Euler 0).
+geometry::TriangleMesh union_of_spheres(const std::vector<Vec3>& centres, double r) {
+  geometry::TriangleMesh m;
+  for (const Vec3& c : centres) {
+    const auto s = balloon_icosphere(c, r, 3);
+    const auto base = static_cast<std::int32_t>(m.vertices.size());
+    m.vertices.insert(m.vertices.end(), s.vertices.begin(), s.vertices.end());
+    for (const Tri& t : s.triangles) m.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+  }
+  return m;
+}
+
+TEST(TopologyRepair, MergesOverlapsIntoAValidSurfaceOfTheRightTopology) {
+  TopologyRepairOptions ro;
+  ro.grid_spacing_mm = 0.5;
+  ro.target_edge_mm = 0.75;
+  {
+    const double r = 4.0, d = 4.0;  // two spheres, centres 4 mm apart
+    const auto m = union_of_spheres({Vec3(0, 0, 0), Vec3(d, 0, 0)}, r);
+    const auto pairs = geometry::self_intersections(m);
+    ASSERT_FALSE(pairs.empty());
+    const auto out = repair_topology(m, pairs, ro);
+    const auto c = geometry::check_mesh(out);
+    EXPECT_TRUE(c.closed && c.edge_manifold && c.vertex_manifold && c.oriented);
+    EXPECT_EQ(c.euler_characteristic, 2);
+    EXPECT_FALSE(geometry::has_self_intersections(out));
+    // Union of two balls: 2 · (4/3 π r³) − lens volume π (4r + d)(2r − d)² / 12.
+    const double exact = 2 * 4.0 / 3.0 * kPi * r * r * r - kPi * (4 * r + d) * (2 * r - d) * (2 * r - d) / 12.0;
+    EXPECT_TRUE(test::rel_near(c.signed_volume_mm3, exact, 0.05));
+  }
+  {
+    std::vector<Vec3> ring;
+    for (int i = 0; i < 10; ++i) ring.emplace_back(10 * std::cos(2 * kPi * i / 10), 10 * std::sin(2 * kPi * i / 10), 0);
+    const auto m = union_of_spheres(ring, 3.5);  // neighbours 6.18 mm apart overlap by 0.8 mm
+    const auto out = repair_topology(m, geometry::self_intersections(m), ro);
+    const auto c = geometry::check_mesh(out);
+    EXPECT_TRUE(c.closed && c.edge_manifold && c.vertex_manifold && c.oriented);
+    EXPECT_EQ(c.euler_characteristic, 0);
+    EXPECT_EQ(c.components, 1);
+    EXPECT_FALSE(geometry::has_self_intersections(out));
+  }
+  EXPECT_THROW((void)repair_topology(geometry::TriangleMesh{}, {}, ro), InvalidInput);
 }
 
 TEST(Balloon, RejectsBadInput) {

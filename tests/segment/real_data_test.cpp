@@ -3,15 +3,19 @@
 // segmentations over the whole image (issue 4: Dice ≥ 0.93, HD95 ≤ 2 voxels). The
 // references are algorithm outputs (VMTK level set, TotalSegmentator). Labels: data, slow.
 #include <array>
+#include <cstdlib>
+#include <filesystem>
 #include <cstdio>
 #include <string>
 
 #include <gtest/gtest.h>
 
+#include "ido/geometry/mesh_checks.h"
+#include "ido/geometry/self_intersection.h"
+#include "ido/io/mesh_io.h"
 #include "ido/io/volume_io.h"
 #include "ido/segment/balloon.h"
 #include "ido/segment/metrics.h"
-#include "ido/segment/topology_repair.h"
 #include "support/test_support.h"
 
 namespace ido::segment {
@@ -24,6 +28,7 @@ struct RealCase {
   bool level_set;         // reference is inside where < 0 (else label > 0.5)
   Vec3 seed_mm;           // from the data README
   bool roi;               // use the reference bbox grown by 10 mm
+  bool extended;          // slow (> ~60 s): run only with IDO_REQUIRE_REAL_ACCURACY=1
 };
 
 image::Volume<std::uint8_t> reference_mask(const image::Volume<float>& ref, bool level_set) {
@@ -45,48 +50,101 @@ std::array<Vec3, 2> grown_bbox(const image::Volume<std::uint8_t>& mask, double g
   return {lo - Vec3::Constant(grow_mm), hi + Vec3::Constant(grow_mm)};
 }
 
-class RealData : public ::testing::TestWithParam<RealCase> {};
+// The outcome of one case. ctest runs every TEST in its own process (gtest_discover_tests),
+// so the validity and accuracy TESTs of a case share the segmentation through a cache file
+// in the temporary folder, reused when newer than this test executable.
+struct Outcome {
+  geometry::TriangleMesh surface;
+  SegmentationScores scores;
+  double voxel_mm = 1;
+  std::string run;  // iterations, time, Euler, leak flag (when computed in this process)
+};
 
-TEST_P(RealData, BalloonAgainstReference) {
-  IDO_REQUIRE_SHARED_DATA();
-  const RealCase c = GetParam();
+bool requires_accuracy() {
+  const char* v = std::getenv("IDO_REQUIRE_REAL_ACCURACY");
+  return v != nullptr && std::string(v) == "1";
+}
+
+Outcome outcome(const RealCase& c) {
   const auto dir = *test::shared_data_dir();
   const image::Volume<float> ct = io::read_volume(dir / c.ct);
   const auto truth = reference_mask(io::read_volume(dir / c.reference), c.level_set);
-  BalloonOptions bo;
-  if (c.roi) bo.roi_mm = grown_bbox(truth, 10.0);
-  const BalloonResult r = segment_balloon(ct, {c.seed_mm}, bo);
-  const SegmentationScores s = compare_masks(surface_to_mask(r.surface, ct), truth);
-  const double voxel = ct.spacing().maxCoeff();
-  std::printf("%s%s: dice %.4f hd95 %.2f mm (%.2f voxels) volume ratio %.3f, %lld iterations, %.2f s, Euler %lld%s\n",
-              c.name.c_str(), c.roi ? " (ROI)" : "", s.dice, s.hd95_mm, s.hd95_mm / voxel, s.volume_ratio,
-              static_cast<long long>(r.report.iterations), r.report.seconds,
-              static_cast<long long>(r.report.euler_characteristic), r.report.leak_warning ? " LEAK WARNING" : "");
-  RecordProperty("dice", std::to_string(s.dice));
-  RecordProperty("hd95_mm", std::to_string(s.hd95_mm));
-  // Whatever the score, the output must be a valid surface.
-  EXPECT_TRUE(r.report.closed);
-  EXPECT_TRUE(r.report.manifold);
-  EXPECT_EQ(r.report.self_intersections, 0);
-  EXPECT_TRUE(find_self_intersections(r.surface).empty());
-  // The required accuracy (issue 4). Known shortfall today: see bench/results/segment.md.
-  if (std::getenv("IDO_REQUIRE_REAL_ACCURACY")) {
-    EXPECT_GE(s.dice, 0.93);
-    EXPECT_LE(s.hd95_mm, 2.0 * voxel);
-  } else if (s.dice < 0.93 || s.hd95_mm > 2.0 * voxel) {
-    std::printf("  KNOWN SHORTFALL against the required Dice 0.93 / HD95 2 voxels\n");
+  Outcome o;
+  o.voxel_mm = ct.spacing().maxCoeff();
+  const std::filesystem::path cache_dir = std::filesystem::temp_directory_path() / "ido-real-data-cache";
+  const std::filesystem::path cache = cache_dir / (c.name + ".ply");
+  std::error_code exe_error, cache_error;
+  const auto exe = std::filesystem::read_symlink("/proc/self/exe", exe_error);
+  const auto exe_time = exe_error ? std::filesystem::file_time_type{} : std::filesystem::last_write_time(exe, exe_error);
+  const auto cache_time = std::filesystem::last_write_time(cache, cache_error);
+  if (!exe_error && !cache_error && exe_time < cache_time) {
+    o.surface = io::read_triangle_mesh(cache);
+    o.run = "(cached surface)";
+  } else {
+    BalloonOptions bo;
+    if (c.roi) bo.roi_mm = grown_bbox(truth, 10.0);
+    const BalloonResult r = segment_balloon(ct, {c.seed_mm}, bo);
+    o.surface = r.surface;
+    o.run = std::to_string(r.report.iterations) + " iterations, " + std::to_string(r.report.seconds) + " s, Euler " +
+            std::to_string(r.report.euler_characteristic) + (r.report.leak_warning ? ", LEAK WARNING" : "");
+    std::filesystem::create_directories(cache_dir);
+    io::write_triangle_mesh(cache, o.surface);
   }
+  o.scores = compare_masks(surface_to_mask(o.surface, ct), truth);
+  std::printf("%s%s: dice %.4f hd95 %.2f mm (%.2f voxels) volume ratio %.3f; %s\n", c.name.c_str(),
+              c.roi ? " (ROI)" : "", o.scores.dice, o.scores.hd95_mm, o.scores.hd95_mm / o.voxel_mm,
+              o.scores.volume_ratio, o.run.c_str());
+  return o;
+}
+
+class RealData : public ::testing::TestWithParam<RealCase> {};
+
+// Cases slower than about a minute on the 2-core CI machine run only on request.
+#define IDO_SKIP_UNLESS_ENABLED(c)                                                       \
+  if ((c).extended && !requires_accuracy())                                              \
+  GTEST_SKIP() << (c).name << " takes minutes; set IDO_REQUIRE_REAL_ACCURACY=1 to run it"
+
+// Whatever the score, the output must be a valid surface with the topology it reports.
+TEST_P(RealData, ValidSurface) {
+  IDO_REQUIRE_SHARED_DATA();
+  const RealCase c = GetParam();
+  IDO_SKIP_UNLESS_ENABLED(c);
+  const Outcome o = outcome(c);
+  const auto m = geometry::check_mesh(o.surface);
+  EXPECT_TRUE(m.closed);
+  EXPECT_TRUE(m.edge_manifold && m.vertex_manifold);
+  EXPECT_TRUE(m.oriented);
+  EXPECT_FALSE(geometry::has_self_intersections(o.surface));
+  RecordProperty("euler", std::to_string(m.euler_characteristic));
+}
+
+// The required accuracy (issue 4): Dice ≥ 0.93 and HD95 ≤ 2 voxels. Known shortfall today
+// (bench/results/segment.md): reported as skipped with the measured figures, or a failure
+// with IDO_REQUIRE_REAL_ACCURACY=1.
+TEST_P(RealData, AccuracyTarget) {
+  IDO_REQUIRE_SHARED_DATA();
+  const RealCase c = GetParam();
+  IDO_SKIP_UNLESS_ENABLED(c);
+  const Outcome o = outcome(c);
+  RecordProperty("dice", std::to_string(o.scores.dice));
+  RecordProperty("hd95_mm", std::to_string(o.scores.hd95_mm));
+  const bool met = o.scores.dice >= 0.93 && o.scores.hd95_mm <= 2.0 * o.voxel_mm;
+  if (!met && !requires_accuracy())
+    GTEST_SKIP() << "known shortfall: measured Dice " << o.scores.dice << " (required ≥ 0.93), HD95 "
+                 << o.scores.hd95_mm / o.voxel_mm << " voxels (required ≤ 2)";
+  EXPECT_GE(o.scores.dice, 0.93);
+  EXPECT_LE(o.scores.hd95_mm, 2.0 * o.voxel_mm);
 }
 
 INSTANTIATE_TEST_SUITE_P(
     Scans, RealData,
     ::testing::Values(
         RealCase{"vmtk_aorta", "vmtk-aorta/aorta.mha", "vmtk-aorta/aorta-reference-levelset.mha", true,
-                 Vec3(-219.73, -174.90, 21.00), false},
-        RealCase{"ctpa", "ctpa/ct.nii.gz", "ctpa/pulmonary_artery.nii.gz", false, Vec3(33.34, -186.66, 693.20), false},
-        RealCase{"ctpa_roi", "ctpa/ct.nii.gz", "ctpa/pulmonary_artery.nii.gz", false, Vec3(33.34, -186.66, 693.20), true},
+                 Vec3(-219.73, -174.90, 21.00), false, true},
+        RealCase{"ctpa", "ctpa/ct.nii.gz", "ctpa/pulmonary_artery.nii.gz", false, Vec3(33.34, -186.66, 693.20), false, false},
+        RealCase{"ctpa_roi", "ctpa/ct.nii.gz", "ctpa/pulmonary_artery.nii.gz", false, Vec3(33.34, -186.66, 693.20), true, true},
         RealCase{"abdomen_dicom", "abdomen-dicom/series", "abdomen-dicom/aorta.nii.gz", false,
-                 Vec3(7.32, -145.52, -782.50), false}),
+                 Vec3(7.32, -145.52, -782.50), false, false}),
     [](const ::testing::TestParamInfo<RealCase>& param_info) { return param_info.param.name; });
 
 }  // namespace

@@ -1,7 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 #include <cstdint>
-#include <memory>
 #include <vector>
 
 #include "ido/core/math.h"
@@ -20,42 +19,22 @@ struct SignedDistanceOptions {
   /// The sign always uses every triangle. The balloon's topology repair excludes the
   /// triangles that intersect others.
   std::vector<std::uint8_t> distance_triangles;
-  /// Accuracy of the hierarchical winding number: a cluster is replaced by its dipole when
-  /// the query is farther than beta × the cluster's radius (Barill et al. 2018 use 2).
+  /// Accuracy of the hierarchical winding number (geometry::WindingNumberOptions::beta): a
+  /// cluster is replaced by its far-field expansion when the query is farther than
+  /// beta × the cluster's radius (Barill et al. 2018 use 2).
   double winding_beta = 2.0;
   bool threaded = true;  ///< use oneTBB
 };
 
-/// Generalised winding number of a triangle soup (Jacobson, Kavan & Sorkine-Hornung,
-/// "Robust inside-outside segmentation using generalized winding numbers", SIGGRAPH 2013),
-/// evaluated hierarchically with a dipole far field (Barill, Dickson, Schmidt, Levin &
-/// Jacobson, "Fast winding numbers for soups and clouds", SIGGRAPH 2018). About 1 inside a
-/// closed outward surface, 0 outside, 2 where a self-intersecting surface overlaps itself,
-/// fractional near holes. Leaves use the exact solid angle of Van Oosterom & Strackee (1983).
-/// Written by hand (the project's own algorithm).
-class FastWindingNumber {
- public:
-  /// Builds the tree (O(n log n)). The mesh is copied.
-  explicit FastWindingNumber(const geometry::TriangleMesh& mesh, double beta = 2.0);
-  FastWindingNumber(FastWindingNumber&&) noexcept;
-  FastWindingNumber& operator=(FastWindingNumber&&) noexcept;
-  ~FastWindingNumber();
-  /// Winding number at @p point_mm (dimensionless).
-  [[nodiscard]] double at(const Vec3& point_mm) const;
-
- private:
-  struct Tree;
-  std::unique_ptr<Tree> m_tree;
-};
-
 /// Signed distance (mm) from a closed triangle surface, sampled on the grid of @p grid
 /// (its size, spacing, origin and direction; its voxel values are ignored): negative inside,
-/// where inside means generalised winding number > 0.5, so self-intersecting or slightly
-/// open surfaces still get a sensible inside. Within options.band_mm of the surface the
-/// magnitude is the exact Euclidean distance to the nearest counted triangle; beyond it, the
-/// value is ±band_mm and the sign is decided once per connected component of far voxels
-/// (exact as long as band_mm exceeds the grid's largest spacing). Runs in
-/// O(triangles × band voxels + grid voxels).
+/// where inside means generalised winding number (geometry::WindingNumber) > 0.5, so
+/// self-intersecting or slightly open surfaces still get a sensible inside. Within
+/// options.band_mm of the surface the magnitude is the exact Euclidean distance to the
+/// nearest counted triangle (an inside point lying on a triangle gets −FLT_MIN, never 0:
+/// inside values are strictly negative); beyond it, the value is ±band_mm and the sign is
+/// decided once per connected component of far voxels (exact as long as band_mm exceeds the
+/// grid's largest spacing). Runs in O(triangles × band voxels + grid voxels).
 /// @throws ido::InvalidInput if the grid is empty, the mesh has no triangles, an index is
 /// out of range, or distance_triangles has the wrong size.
 [[nodiscard]] image::Volume<float> signed_distance(const geometry::TriangleMesh& surface,
