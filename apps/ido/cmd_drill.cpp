@@ -7,6 +7,7 @@
 
 #include "cli_util.h"
 #include "command.h"
+#include "drill_report.h"
 #include "ido/core/error.h"
 #include "ido/drill/boundary_surface.h"
 #include "ido/drill/embedding.h"
@@ -35,10 +36,6 @@ struct DrillOptions {
   double stiffness = 1.5;
 };
 
-nlohmann::json times_ms(const drill::Percentiles& p) {
-  return {{"p50", p.p50 * 1e3}, {"p99", p.p99 * 1e3}, {"p99_9", p.p999 * 1e3}, {"max", p.max * 1e3}, {"count", p.count}};
-}
-
 void run(const DrillOptions& o, const GlobalOptions& /*g*/) {
   if (!io::is_tet_mesh_path(o.output)) throw InvalidInput(fmt::format("{}: -o must be a .vtu (or .msh, .node) file", o.output));
   if (!o.surface.empty() && !io::is_triangle_mesh_path(o.surface)) {
@@ -63,33 +60,14 @@ void run(const DrillOptions& o, const GlobalOptions& /*g*/) {
 
   drill::Simulator sim(hierarchy, device, so);
   sim.run(device.duration() + 60.0);
-  const auto& st = sim.stats();
 
   io::write_tet_mesh(o.output, drill::full_leaf_mesh(hierarchy));
   const auto surface = drill::assemble_surface(sim.render_v_lists(), hierarchy.vertices());
   if (!o.surface.empty()) io::write_triangle_mesh(o.surface, surface);
   if (!o.report.empty()) {
-    const double after = hierarchy.material_volume();
-    nlohmann::json r;
+    nlohmann::json r = drill_session_json(hierarchy, sim, so, before);
     r["mesh"] = o.mesh;
-    r["roots"] = hierarchy.root_count();
-    r["tool"] = {{"burr_radius_mm", so.tool.burr_radius_mm}, {"shaft_radius_mm", so.tool.shaft_radius_mm},
-                 {"samples", so.tool.sample_count}};
-    r["removed_volume_mm3"] = before - after;
-    r["remaining_volume_mm3"] = after;
-    r["node_count"] = hierarchy.node_count();
-    r["bytes_per_node"] = hierarchy.bytes_per_node();
-    r["storage_bytes_per_node_incl_free_list"] = hierarchy.storage_bytes_per_node();
     r["surface_triangles"] = surface.triangles.size();
-    r["update_time_ms"] = times_ms(drill::percentiles(st.update_time_s));
-    r["haptic_period_ms"] = times_ms(drill::percentiles(st.haptic_period_s));
-    r["force_compute_ms"] = times_ms(drill::percentiles(st.force_compute_time_s));
-    r["haptic_ticks"] = st.haptic_ticks;
-    r["missed_1ms_deadlines"] = st.missed_deadlines;
-    r["collision_updates"] = st.collision_updates;
-    r["render_snapshots"] = st.render_snapshots;
-    r["force"] = {{"peak_n", st.peak_force_n}, {"mean_in_contact_n", st.mean_force_n},
-                  {"max_step_between_ticks_n", st.max_force_step_n}, {"ticks_in_contact", st.contact_ticks}};
     write_text_file(o.report, r.dump(2) + "\n");
   }
 }

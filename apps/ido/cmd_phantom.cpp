@@ -27,6 +27,8 @@ struct PhantomCliOptions {
   std::string spacing = "1,1,1";
   std::uint64_t seed = 1;
   bool json_seeds = false;
+  std::string drill_path;
+  double drill_speed_mm_s = 4.0;
 };
 
 void run(const PhantomCliOptions& o) {
@@ -48,14 +50,31 @@ void run(const PhantomCliOptions& o) {
     po.noise_hu = 0.0;
     po.noise_hu = o.noise_fraction * segment::make_phantom(kind, po).contrast_hu;
   }
+  if (!o.drill_path.empty() && !(o.drill_speed_mm_s > 0.0))
+    throw InvalidInput("--drill-speed must be positive");
   const segment::Phantom ph = segment::make_phantom(kind, po);
+  if (!o.drill_path.empty() && ph.drill_path_mm.empty())
+    throw InvalidInput(fmt::format("--drill-path: the {} phantom has no bone to drill", o.kind));
   io::write_volume(o.output, ph.ct_hu);
   if (!o.labels.empty()) io::write_volume(o.labels, ph.labels);
+  if (!o.drill_path.empty()) {
+    // A scripted tool trajectory (ido drill's CSV: t, x, y, z) along the phantom's drill
+    // polyline at a constant speed.
+    std::string csv = "t_s,x_mm,y_mm,z_mm\n";
+    double t = 0.0;
+    for (std::size_t i = 0; i < ph.drill_path_mm.size(); ++i) {
+      if (i > 0) t += (ph.drill_path_mm[i] - ph.drill_path_mm[i - 1]).norm() / o.drill_speed_mm_s;
+      const Vec3& p = ph.drill_path_mm[i];
+      csv += fmt::format("{:.6f},{:.6f},{:.6f},{:.6f}\n", t, p.x(), p.y(), p.z());
+    }
+    write_text_file(o.drill_path, csv);
+  }
 
   if (o.json_seeds) {
     nlohmann::json seeds = nlohmann::json::array();
     for (std::size_t s = 0; s < ph.seeds_mm.size(); ++s)
-      seeds.push_back({{"world_mm", {ph.seeds_mm[s].x(), ph.seeds_mm[s].y(), ph.seeds_mm[s].z()}},
+      seeds.push_back({{"label", ph.seed_labels[s]},
+                       {"world_mm", {ph.seeds_mm[s].x(), ph.seeds_mm[s].y(), ph.seeds_mm[s].z()}},
                        {"voxel", {ph.seeds_voxel[s][0], ph.seeds_voxel[s][1], ph.seeds_voxel[s][2]}}});
     const nlohmann::json j = {{"kind", std::string(segment::phantom_kind_name(kind))},
                               {"description", ph.description},
@@ -81,7 +100,7 @@ void run(const PhantomCliOptions& o) {
               po.noise_hu, po.blur_voxels, ph.contrast_hu);
   std::printf("truth Euler characteristic %d\n", ph.truth_euler_characteristic);
   for (std::size_t s = 0; s < ph.seeds_mm.size(); ++s)
-    std::printf("seed %zu: --seed %g,%g,%g  (or --seed-voxel %lld,%lld,%lld)\n", s + 1, ph.seeds_mm[s].x(), ph.seeds_mm[s].y(), ph.seeds_mm[s].z(), static_cast<long long>(ph.seeds_voxel[s][0]),
+    std::printf("seed %zu (label %d): --seed %g,%g,%g  (or --seed-voxel %lld,%lld,%lld)\n", s + 1, ph.seed_labels[s], ph.seeds_mm[s].x(), ph.seeds_mm[s].y(), ph.seeds_mm[s].z(), static_cast<long long>(ph.seeds_voxel[s][0]),
                 static_cast<long long>(ph.seeds_voxel[s][1]), static_cast<long long>(ph.seeds_voxel[s][2]));
 }
 
@@ -89,15 +108,17 @@ void setup(CLI::App& app, const GlobalOptions& /*g*/) {
   auto* sub = app.add_subcommand("phantom", "Write a synthetic CT volume (HU) with ground-truth labels");
   auto opts = std::make_shared<PhantomCliOptions>();
   sub->add_option("KIND", opts->kind,
-                  "sphere, torus, y-bifurcation, u-tube, vessel-near-bone, vessel-tree or vertebra")
+                  "sphere, torus, y-bifurcation, u-tube, vessel-near-bone, vessel-tree, vertebra or spine-aorta")
       ->required();
   sub->add_option("-o,--output", opts->output, "CT volume to write (.nii.gz, .nrrd, .mha)")->required();
-  sub->add_option("--labels", opts->labels, "Ground-truth label volume to write (1 = object)");
+  sub->add_option("--labels", opts->labels, "Ground-truth label volume to write (1 = object; spine-aorta: 1 aorta, 2 vertebra)");
   sub->add_option("--noise", opts->noise_hu, "Gaussian noise sigma (HU)");
   sub->add_option("--noise-fraction", opts->noise_fraction, "Noise sigma as a fraction of the contrast (e.g. 0.2)");
   sub->add_option("--blur", opts->blur_voxels, "Gaussian blur sigma (voxels)");
   sub->add_option("--spacing", opts->spacing, "Voxel size SX,SY,SZ in mm (default 1,1,1)");
   sub->add_option("--seed", opts->seed, "Noise seed (same seed, same volume)");
+  sub->add_option("--drill-path", opts->drill_path, "Also write the phantom's drill trajectory (CSV t,x,y,z) here");
+  sub->add_option("--drill-speed", opts->drill_speed_mm_s, "Tool speed along the drill path (mm/s, default 4)");
   sub->add_flag("--json-seeds", opts->json_seeds, "Print the seeds and phantom facts as JSON");
   sub->callback([opts] { run(*opts); });
 }

@@ -56,7 +56,7 @@ double sd_cylinder_z(const Vec3& p, const Vec3& c, double r, double h) {
 struct Layer {
   Sdf sdf;
   double hu = 0.0;
-  bool object = false;
+  std::uint8_t label = 0;  ///< truth label of the region (0 = not labelled)
   double shell_mm = 0.0;
   double inner_hu = 0.0;
 };
@@ -65,6 +65,8 @@ struct Scene {
   Vec3 extent_mm;
   std::vector<Layer> layers;
   std::vector<Vec3> seeds_mm;
+  std::vector<int> seed_labels;  ///< label of each seed; empty = all 1
+  std::vector<Vec3> drill_path_mm;
   std::string description;
   double object_hu = 0.0;
   double background_hu = 0.0;
@@ -73,7 +75,7 @@ struct Scene {
 
 struct Sample {
   double hu;
-  bool object;
+  std::uint8_t label;
   double boundary_mm;  ///< lower bound of the distance to the nearest tissue boundary
 };
 
@@ -84,7 +86,7 @@ Sample classify(const Scene& s, const PhantomIntensities& hu, const Vec3& p) {
   const double ey = (p.y() - 0.5 * s.extent_mm.y()) / (0.5 * s.extent_mm.y());
   const double rho = std::sqrt(ex * ex + ey * ey);
   // |∇ρ| ≤ 1 / smallest semi-axis, so the ellipse is at least |ρ − 1| · semi-axis away.
-  Sample out{rho <= 1.0 ? hu.soft_tissue_hu : hu.fat_hu, false,
+  Sample out{rho <= 1.0 ? hu.soft_tissue_hu : hu.fat_hu, 0,
              std::abs(rho - 1.0) * 0.5 * std::min(s.extent_mm.x(), s.extent_mm.y())};
   for (const Layer& l : s.layers) {
     const double d = l.sdf(p);
@@ -92,9 +94,29 @@ Sample classify(const Scene& s, const PhantomIntensities& hu, const Vec3& p) {
     if (l.shell_mm > 0.0) out.boundary_mm = std::min(out.boundary_mm, std::abs(d + l.shell_mm));
     if (d >= 0.0) continue;
     out.hu = (l.shell_mm > 0.0 && d < -l.shell_mm) ? l.inner_hu : l.hu;
-    out.object = l.object;
+    out.label = l.label;
   }
   return out;
+}
+
+/// The vertebra of the Vertebra phantom moved by @p shift (mm): body r 15 mm, a ring of
+/// pedicles and lamina (outer r 13, canal r 8) 12 mm high, spinous and transverse processes.
+Sdf vertebra_sdf(const Vec3& shift) {
+  const Vec3 body = Vec3(32.1, 50.0, 20.1) + shift, canal = Vec3(32.1, 26.0, 20.1) + shift;
+  return [=](const Vec3& p) {
+    const double b = sd_cylinder_z(p, body, 15.0, 12.0);
+    const double ring = std::max(sd_cylinder_z(p, canal, 13.0, 6.0), -(hypot2(p.x() - canal.x(), p.y() - canal.y()) - 8.0));
+    const double spinous = sd_capsule(p, Vec3(32.1, 14.0, 20.1) + shift, Vec3(32.1, 6.0, 16.0) + shift, 3.0, 3.0);
+    const double tl = sd_capsule(p, Vec3(21.1, 28.0, 20.1) + shift, Vec3(8.0, 24.0, 20.1) + shift, 3.0, 3.0);
+    const double tr = sd_capsule(p, Vec3(43.1, 28.0, 20.1) + shift, Vec3(56.0, 24.0, 20.1) + shift, 3.0, 3.0);
+    return std::min({b, ring, spinous, tl, tr});
+  };
+}
+
+/// A pedicle-screw trajectory for the vertebra moved by @p shift: from behind and beside the
+/// lamina, through the left pedicle (the ring between canal and body), into the body.
+std::vector<Vec3> pedicle_path(const Vec3& shift) {
+  return {Vec3(17.0, 12.0, 20.1) + shift, Vec3(19.0, 18.0, 20.1) + shift, Vec3(29.0, 50.0, 20.1) + shift};
 }
 
 Scene make_scene(PhantomKind kind, const PhantomOptions& o) {
@@ -190,21 +212,28 @@ Scene make_scene(PhantomKind kind, const PhantomOptions& o) {
     }
     case PhantomKind::Vertebra: {
       s.extent_mm = {64, 72, 40};
-      const Vec3 body(32.1, 50.0, 20.1), canal(32.1, 26.0, 20.1);
-      const Sdf bone = [=](const Vec3& p) {
-        const double b = sd_cylinder_z(p, body, 15.0, 12.0);
-        // Pedicles and lamina: a ring (outer r 13, inner r 8 = canal) 12 mm high.
-        const double ring = std::max(sd_cylinder_z(p, canal, 13.0, 6.0), -(hypot2(p.x() - canal.x(), p.y() - canal.y()) - 8.0));
-        const double spinous = sd_capsule(p, Vec3(32.1, 14.0, 20.1), Vec3(32.1, 6.0, 16.0), 3.0, 3.0);
-        const double tl = sd_capsule(p, Vec3(21.1, 28.0, 20.1), Vec3(8.0, 24.0, 20.1), 3.0, 3.0);
-        const double tr = sd_capsule(p, Vec3(43.1, 28.0, 20.1), Vec3(56.0, 24.0, 20.1), 3.0, 3.0);
-        return std::min({b, ring, spinous, tl, tr});
-      };
-      s.layers.push_back({bone, hu.cortical_hu, true, 1.5, hu.cancellous_hu});
+      const Vec3 body(32.1, 50.0, 20.1);
+      s.layers.push_back({vertebra_sdf(Vec3::Zero()), hu.cortical_hu, true, 1.5, hu.cancellous_hu});
       s.seeds_mm = {body};
+      s.drill_path_mm = pedicle_path(Vec3::Zero());
       s.object_hu = hu.cancellous_hu;
       s.description = "vertebra: body r 15 mm (cortex 1.5 mm, cancellous core), ring of pedicles and "
                       "lamina around an 8 mm canal, spinous and transverse processes (genus 1)";
+      break;
+    }
+    case PhantomKind::SpineAorta: {
+      // The vertebra of PhantomKind::Vertebra (label 2) with the abdominal aorta (label 1,
+      // r 9 mm) running along z in front of it and to its left, 7.8 mm from the body.
+      s.extent_mm = {84, 92, 44};
+      const Vec3 shift(4.0, 0.0, 2.0);
+      const Vec3 aorta_a(59.0, 72.0, 12.0), aorta_b(59.0, 72.0, 32.0);
+      vessel([=](const Vec3& p) { return sd_capsule(p, aorta_a, aorta_b, 9.0, 9.0); });
+      s.layers.push_back({vertebra_sdf(shift), hu.cortical_hu, 2, 1.5, hu.cancellous_hu});
+      s.seeds_mm = {Vec3(59.0, 72.0, 22.0), Vec3(32.1, 50.0, 20.1) + shift};
+      s.seed_labels = {1, 2};
+      s.drill_path_mm = pedicle_path(shift);
+      s.description = "vertebra (label 2, genus 1) beside the aorta (label 1, r 9 mm, 7.8 mm from the "
+                      "vertebral body), with a pedicle-screw drill path";
       break;
     }
   }
@@ -241,6 +270,7 @@ std::string_view phantom_kind_name(PhantomKind kind) {
     case PhantomKind::VesselNearBone: return "vessel-near-bone";
     case PhantomKind::VesselTree: return "vessel-tree";
     case PhantomKind::Vertebra: return "vertebra";
+    case PhantomKind::SpineAorta: return "spine-aorta";
   }
   return "unknown";
 }
@@ -249,7 +279,9 @@ PhantomKind parse_phantom_kind(std::string_view name) {
   std::string n(name);
   for (char& c : n) c = c == '_' ? '-' : char(std::tolower(static_cast<unsigned char>(c)));
   std::string valid;
-  for (PhantomKind k : all_phantom_kinds()) {
+  std::vector<PhantomKind> kinds = all_phantom_kinds();
+  kinds.push_back(PhantomKind::SpineAorta);
+  for (PhantomKind k : kinds) {
     if (n == phantom_kind_name(k)) return k;
     valid += (valid.empty() ? "" : ", ") + std::string(phantom_kind_name(k));
   }
@@ -286,29 +318,33 @@ Phantom make_phantom(PhantomKind kind, const PhantomOptions& o) {
           for (std::int64_t i = 0; i < nx; ++i) {
             const Vec3 c = ph.ct_hu.index_to_world(Vec3(double(i), double(j), double(k)));
             float value;
-            bool object;
+            std::uint8_t object;
             const Sample centre = classify(scene, o.intensities, c);
             if (ss == 1 || centre.boundary_mm > half_diag) {
               value = float(centre.hu);
-              object = centre.object;
+              object = centre.label;
             } else {
               double sum = 0.0;
-              int inside = 0;
+              int inside[3] = {0, 0, 0};
               for (int c3 = 0; c3 < ss; ++c3)
                 for (int c2 = 0; c2 < ss; ++c2)
                   for (int c1 = 0; c1 < ss; ++c1) {
                     const Vec3 off((c1 + 0.5) / ss - 0.5, (c2 + 0.5) / ss - 0.5, (c3 + 0.5) / ss - 0.5);
                     const Sample smp = classify(scene, o.intensities, c + off.cwiseProduct(o.spacing_mm));
                     sum += smp.hu;
-                    inside += smp.object;
+                    inside[std::min<int>(smp.label, 2)] += 1;
                   }
               value = float(sum / (ss * ss * ss));
               // More than half the samples; an exact tie (even ss) goes to the centre sample.
-              const int twice = 2 * inside, all = ss * ss * ss;
-              object = twice > all || (twice == all && centre.object);
+              const int all = ss * ss * ss;
+              object = 0;
+              for (std::uint8_t l = 1; l <= 2; ++l) {
+                const int twice = 2 * inside[l];
+                if (twice > all || (twice == all && centre.label == l)) object = l;
+              }
             }
             ph.ct_hu(i, j, k) = value;
-            ph.labels(i, j, k) = object ? 1 : 0;
+            ph.labels(i, j, k) = object;
           }
         }
       },
@@ -335,6 +371,8 @@ Phantom make_phantom(PhantomKind kind, const PhantomOptions& o) {
   }
 
   ph.seeds_mm = scene.seeds_mm;
+  ph.seed_labels = scene.seed_labels.empty() ? std::vector<int>(scene.seeds_mm.size(), 1) : scene.seed_labels;
+  ph.drill_path_mm = scene.drill_path_mm;
   for (const Vec3& sd : scene.seeds_mm) {
     const Vec3 idx = ph.ct_hu.world_to_index(sd);
     ph.seeds_voxel.push_back({std::llround(idx[0]), std::llround(idx[1]), std::llround(idx[2])});

@@ -27,6 +27,8 @@ enum class PhantomKind {
   Vertebra,        ///< vertebral body (cortical shell, cancellous core), pedicles and lamina
                    ///< closing a ring around the spinal canal, spinous process; label = bone
                    ///< (genus 1, χ = 0)
+  SpineAorta,      ///< the vertebra (label 2) beside the aorta (label 1, r 9 mm): the pipeline
+                   ///< demo's CT; seeds for both, and a pedicle-screw drill path
 };
 
 /// All kinds, in declaration order.
@@ -66,7 +68,12 @@ struct Phantom {
   image::Volume<float> ct_hu;          ///< CT-like intensities (HU)
   image::Volume<std::uint8_t> labels;  ///< ground truth on the same grid: 1 = object
   std::vector<Vec3> seeds_mm;          ///< seed points inside the object (world mm)
-  std::vector<Index3> seeds_voxel;     ///< the same seeds as voxel indices (nearest voxel)
+  std::vector<Index3> seeds_voxel;
+  /// Label (value in `labels`) of the object each seed lies in; 1 for single-object kinds.
+  std::vector<int> seed_labels;
+  /// A drill trajectory (polyline, world mm) for kinds with bone (a pedicle-screw path for
+  /// the vertebrae); empty otherwise.
+  std::vector<Vec3> drill_path_mm;     ///< the same seeds as voxel indices (nearest voxel)
   /// Euler characteristic of the truth's boundary surface (2 − 2·genus per component),
   /// computed from the label voxels (see mask_euler_characteristic in metrics.h).
   int truth_euler_characteristic = 2;

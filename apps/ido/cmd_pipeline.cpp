@@ -1,0 +1,432 @@
+// SPDX-License-Identifier: Apache-2.0
+// `ido pipeline CT --seed ... -o OUTDIR`: the paper's chain in one run. Segment a vessel (and
+// optionally a bone) with the balloon, mesh the bone (or the vessel) with tetrahedra, drill a
+// scripted path with density from the CT, deform the vessel segment, and write every stage's
+// files, pictures, a report.json and a summary.md. Orchestration only: every step is a
+// library call.
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "cli_util.h"
+#include "command.h"
+#include "drill_report.h"
+#include "ido/core/error.h"
+#include "ido/core/log.h"
+#include "ido/drill/boundary_surface.h"
+#include "ido/drill/embedding.h"
+#include "ido/drill/haptic_device.h"
+#include "ido/drill/simulator.h"
+#include "ido/drill/tet_hierarchy.h"
+#include "ido/drill/tool.h"
+#include "ido/geometry/mesh_checks.h"
+#include "ido/geometry/tet_quality.h"
+#include "ido/io/mesh_io.h"
+#include "ido/io/scene.h"
+#include "ido/io/volume_io.h"
+#include "ido/meshing/distance_field.h"
+#include "ido/meshing/tetrahedralize.h"
+#include "ido/segment/balloon.h"
+#include "ido/segment/metrics.h"
+#include "ido/viz/plot.h"
+#include "ido/viz/renderer.h"
+
+namespace ido::cli {
+namespace {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+struct Options {
+  std::string ct;
+  std::vector<std::string> seeds, seed_voxels, bone_seeds, bone_seed_voxels;
+  std::string out_dir;
+  std::string drill_path;
+  std::string scene;
+  bool deform = false;
+  std::string tool = "sphere:radius=2";
+  int max_depth = 3;
+  double edge_mm = 0.0;
+  std::string truth;
+  int vessel_label = 1;
+  int bone_label = 2;
+  double deform_steps = 60;
+};
+
+/// Everything one segmented organ produced.
+struct Organ {
+  std::string name;
+  segment::BalloonResult balloon;
+  image::Volume<std::uint8_t> mask;
+};
+
+std::vector<Vec3> collect_seeds(const std::vector<std::string>& world, const std::vector<std::string>& voxel,
+                                const image::Volume<float>& ct, const char* flag_world, const char* flag_voxel) {
+  std::vector<Vec3> seeds;
+  for (const auto& s : world) seeds.push_back(parse_vec3(s, flag_world));
+  for (const auto& s : voxel) {
+    const Index3 idx = parse_index3(s, flag_voxel);
+    if (!ct.contains(idx[0], idx[1], idx[2]))
+      throw InvalidInput(fmt::format("{} {}: voxel outside the {}x{}x{} volume", flag_voxel, s, ct.size(0),
+                                     ct.size(1), ct.size(2)));
+    seeds.push_back(ct.index_to_world(Vec3(double(idx[0]), double(idx[1]), double(idx[2]))));
+  }
+  return seeds;
+}
+
+json mesh_check_json(const geometry::MeshCheckReport& r) {
+  return {{"vertices", r.vertices},
+          {"edges", r.edges},
+          {"triangles", r.triangles},
+          {"closed", r.closed},
+          {"manifold", r.edge_manifold && r.vertex_manifold},
+          {"oriented", r.oriented},
+          {"euler_characteristic", r.euler_characteristic},
+          {"components", r.components},
+          {"area_mm2", r.area_mm2},
+          {"volume_mm3", r.signed_volume_mm3}};
+}
+
+json scores_json(const segment::SegmentationScores& s) {
+  return {{"dice", s.dice},         {"hd95_mm", s.hd95_mm},
+          {"assd_mm", s.assd_mm},   {"volume_ratio", s.volume_ratio},
+          {"components", s.components_mask}, {"truth_components", s.components_truth}};
+}
+
+image::Volume<std::uint8_t> label_mask(const image::Volume<float>& labels, int label) {
+  auto mask = labels.like<std::uint8_t>(0);
+  for (std::size_t i = 0; i < labels.voxel_count(); ++i)
+    mask.data()[i] = std::lround(labels.data()[i]) == label ? 1 : 0;
+  return mask;
+}
+
+Organ segment_organ(const std::string& name, const image::Volume<float>& ct, const std::vector<Vec3>& seeds,
+                    bool bone, const fs::path& dir, Progress* progress) {
+  segment::BalloonOptions bo;
+  bo.accept_brighter = bone;
+  Organ organ{name, segment::segment_balloon(ct, seeds, bo, progress), {}};
+  organ.mask = segment::surface_to_mask(organ.balloon.surface, ct);
+  io::write_triangle_mesh(dir / (name + "_surface.stl"), organ.balloon.surface);
+  io::write_volume(dir / (name + "_mask.nii.gz"), organ.mask);
+  return organ;
+}
+
+json balloon_json(const segment::BalloonReport& r) {
+  return {{"reference_hu", r.model.reference}, {"tolerance_hu", r.model.tolerance},
+          {"iterations", r.iterations},        {"seconds", r.seconds},
+          {"volume_mm3", r.volume_mm3},        {"area_mm2", r.area_mm2},
+          {"vertices", r.vertices},            {"triangles", r.triangles},
+          {"euler_characteristic", r.euler_characteristic},
+          {"closed", r.closed},                {"manifold", r.manifold},
+          {"self_intersections", r.self_intersections},
+          {"converged", r.converged},          {"leak_warning", r.leak_warning},
+          {"stop_reason", r.stop_reason}};
+}
+
+/// Axial slice through @p point with each organ's contour, and a 3D view of the surfaces.
+void organ_pictures(const image::Volume<float>& ct, const std::vector<const Organ*>& organs, const Vec3& point,
+                    const fs::path& dir, json& pictures) {
+  const Vec3 idx = ct.world_to_index(point);
+  const auto k = std::clamp<std::int64_t>(std::llround(idx.z()), 0, ct.size(2) - 1);
+  const std::array<Vec3, 3> colours = {Vec3(1, 0.15, 0.1), Vec3(0.1, 0.8, 1.0), Vec3(1, 0.9, 0.1)};
+  {
+    viz::Renderer r(768, 768);
+    r.add_slice(ct, 2, k, {.window = 1200, .level = 200});
+    for (std::size_t i = 0; i < organs.size(); ++i) r.add_contour(organs[i]->mask, 2, k, colours[i % 3]);
+    r.set_camera(r.slice_camera(0));
+    r.write_png(dir / "ct_slice_contours.png");
+    pictures.push_back({{"file", "ct_slice_contours.png"},
+                        {"what", fmt::format("CT slice k={} with the segmentation contours", k)}});
+  }
+  {
+    viz::Renderer r(900, 700);
+    const std::array<Vec3, 3> surface_colours = {Vec3(0.85, 0.25, 0.2), Vec3(0.92, 0.88, 0.78), Vec3(0.4, 0.7, 0.9)};
+    for (std::size_t i = 0; i < organs.size(); ++i) r.add_surface(organs[i]->balloon.surface, surface_colours[i % 3]);
+    r.set_camera(r.fit_camera(30, 20));
+    r.write_png(dir / "surfaces.png");
+    pictures.push_back({{"file", "surfaces.png"}, {"what", "segmented surfaces"}});
+  }
+}
+
+geometry::TetMesh mesh_organ(const Organ& organ, double edge_mm, Progress* progress) {
+  const auto sdf = meshing::signed_distance_from_mask(organ.mask);
+  return meshing::tetrahedralize(sdf, {.edge_mm = edge_mm}, progress);
+}
+
+json tet_quality_json(const geometry::TetMeshReport& q) {
+  return {{"vertices", q.vertices},
+          {"tets", q.tets},
+          {"inverted", q.inverted},
+          {"volume_mm3", q.volume_mm3},
+          {"min_dihedral_deg", q.min_dihedral_deg},
+          {"max_dihedral_deg", q.max_dihedral_deg},
+          {"min_mean_ratio", q.min_mean_ratio},
+          {"boundary_closed", q.boundary_closed},
+          {"boundary_manifold", q.boundary_manifold}};
+}
+
+json run_drill(const Options& o, const geometry::TetMesh& mesh, const image::Volume<float>& ct, const fs::path& dir,
+               json& pictures) {
+  drill::SimulatorOptions so;
+  so.tool = drill::parse_tool(o.tool);
+  so.erosion.max_depth = o.max_depth;
+  auto device = drill::ScriptedTrajectory::load_csv(o.drill_path);
+  drill::TetHierarchy hierarchy(mesh);
+  drill::assign_density_from_ct(hierarchy, ct);
+  const double before = hierarchy.material_volume();
+  drill::Simulator sim(hierarchy, device, so);
+  sim.run(device.duration() + 60.0);
+  const auto leaves = drill::full_leaf_mesh(hierarchy);
+  io::write_tet_mesh(dir / "drilled.vtu", leaves);
+  const auto surface = drill::assemble_surface(sim.render_v_lists(), hierarchy.vertices());
+  io::write_triangle_mesh(dir / "drilled_surface.stl", surface);
+  json r = drill_session_json(hierarchy, sim, so, before);
+  r["path"] = o.drill_path;
+  r["surface_checks"] = mesh_check_json(geometry::check_mesh(surface));
+
+  // Picture: the drilled mesh cut through the middle of the tool path, coloured by density.
+  const Vec3 mid = 0.5 * (device.pose_at(0.0).position_mm + device.pose_at(device.duration()).position_mm);
+  viz::Renderer pic(900, 700);
+  pic.add_tet_mesh_clipped(leaves, {.point = mid, .normal = Vec3(1, 0, 0)}, "density");
+  pic.set_camera(pic.fit_camera(90, 10));
+  pic.write_png(dir / "drilled_clip.png");
+  pictures.push_back({{"file", "drilled_clip.png"}, {"what", "drilled mesh cut through the tool path, coloured by density"}});
+  return r;
+}
+
+/// A short deformation of @p mesh: corotational FEM, implicit Euler, the lowest 15 % (along
+/// z) clamped, sagging under gravity along −y. The scene is written next to the mesh so it
+/// can be re-run with `ido simulate`.
+json run_deformation(const geometry::TetMesh& mesh, const fs::path& dir, int steps, json& pictures,
+                     Progress* progress) {
+  const fs::path sim_dir = dir / "deformation";
+  fs::create_directories(sim_dir);
+  io::write_tet_mesh(sim_dir / "body.vtu", mesh);
+  Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
+  for (const auto& v : mesh.vertices) {
+    lo = lo.cwiseMin(v);
+    hi = hi.cwiseMax(v);
+  }
+  const double clamp_z = lo.z() + 0.15 * (hi.z() - lo.z());
+  const json scene = {
+      {"description", "pipeline: the segmented vessel, clamped at its lower end, sagging under gravity"},
+      {"dt_s", 0.01},
+      {"steps", steps},
+      {"output_every", std::max(1, steps / 10)},
+      {"integrator", "implicit_euler"},
+      {"implicit", {{"cg_tolerance", 1e-6}, {"cg_max_iterations", 300}}},
+      {"gravity_mm_s2", {0, -9806.65, 0}},
+      {"damping", {{"rayleigh_mass_per_s", 1.0}, {"rayleigh_stiffness_s", 0.0}}},
+      {"bodies",
+       {{{"name", "vessel"},
+         {"mesh", {{"file", "body.vtu"}}},
+         {"model", "corotational_fem"},
+         {"material", {{"youngs_modulus_pa", 5e4}, {"poisson_ratio", 0.45}, {"density_kg_m3", 1060}}},
+         {"fixed", {{{"box_min_mm", {lo.x() - 1, lo.y() - 1, lo.z() - 1}},
+                     {"box_max_mm", {hi.x() + 1, hi.y() + 1, clamp_z}}}}}}}}};
+  write_text_file((sim_dir / "scene.json").string(), scene.dump(2) + "\n");
+  auto loaded = io::load_scene(sim_dir / "scene.json");
+  const auto result = io::run_scene(loaded, sim_dir, progress);
+  const std::vector<viz::PlotSeries> series = {
+      {"kinetic", result.time_s, result.kinetic_mj, {}},
+      {"elastic", result.time_s, result.elastic_mj, {}},
+      {"gravitational", result.time_s, result.gravitational_mj, {}},
+      {"total", result.time_s, result.total_mj, {}}};
+  viz::write_line_plot(sim_dir / "energy.png", series,
+                       {.width_px = 900, .height_px = 540, .title = "Energy", .x_label = "time (s)",
+                        .y_label = "energy (mJ)"});
+  pictures.push_back({{"file", "deformation/energy.png"}, {"what", "energy of the deforming vessel over time"}});
+  std::vector<double> ms = result.step_ms;
+  std::sort(ms.begin(), ms.end());
+  return {{"scene", "deformation/scene.json"},
+          {"steps", steps},
+          {"frames", result.frames},
+          {"wall_time_s", result.wall_time_s},
+          {"ms_per_step_p50", ms.empty() ? 0.0 : ms[ms.size() / 2]},
+          {"final_energy_mj",
+           {{"kinetic", result.kinetic_mj.back()},
+            {"elastic", result.elastic_mj.back()},
+            {"gravitational", result.gravitational_mj.back()},
+            {"total", result.total_mj.back()}}}};
+}
+
+json run_user_scene(const std::string& scene_path, const fs::path& dir, Progress* progress) {
+  const fs::path sim_dir = dir / "simulation";
+  fs::create_directories(sim_dir);
+  auto scene = io::load_scene(scene_path);
+  const auto result = io::run_scene(scene, sim_dir, progress);
+  return {{"scene", scene_path}, {"frames", result.frames}, {"wall_time_s", result.wall_time_s},
+          {"final_total_energy_mj", result.total_mj.empty() ? 0.0 : result.total_mj.back()}};
+}
+
+std::string summary_markdown(const json& report) {
+  std::string md = "# ido pipeline summary\n\n";
+  md += fmt::format("Input: `{}`\n\n", report["input"].get<std::string>());
+  md += "| stage | figures |\n|---|---|\n";
+  for (const auto& [name, organ] : report["segmentation"].items()) {
+    std::string fig = fmt::format("volume {:.0f} mm³, {} triangles, Euler {}, closed {}, self-intersections {}, {:.1f} s",
+                                  organ["balloon"]["volume_mm3"].get<double>(),
+                                  organ["balloon"]["triangles"].get<std::int64_t>(),
+                                  organ["balloon"]["euler_characteristic"].get<std::int64_t>(),
+                                  organ["balloon"]["closed"].get<bool>(),
+                                  organ["balloon"]["self_intersections"].get<std::int64_t>(),
+                                  organ["balloon"]["seconds"].get<double>());
+    if (organ.contains("scores"))
+      fig += fmt::format("; Dice {:.3f}, HD95 {:.2f} mm", organ["scores"]["dice"].get<double>(),
+                         organ["scores"]["hd95_mm"].get<double>());
+    md += fmt::format("| segment {} | {} |\n", name, fig);
+  }
+  if (report.contains("tetmesh")) {
+    const auto& t = report["tetmesh"];
+    md += fmt::format("| tetrahedral mesh ({}) | {} tets, volume {:.0f} mm³, dihedral {:.1f}°–{:.1f}°, inverted {} |\n",
+                      t["organ"].get<std::string>(), t["quality"]["tets"].get<std::size_t>(),
+                      t["quality"]["volume_mm3"].get<double>(), t["quality"]["min_dihedral_deg"].get<double>(),
+                      t["quality"]["max_dihedral_deg"].get<double>(), t["quality"]["inverted"].get<std::size_t>());
+  }
+  if (report.contains("drill")) {
+    const auto& d = report["drill"];
+    md += fmt::format("| drill | removed {:.1f} mm³, remaining {:.0f} mm³, {} nodes at {:.1f} B/node, update p50 {:.2f} ms |\n",
+                      d["removed_volume_mm3"].get<double>(), d["remaining_volume_mm3"].get<double>(),
+                      d["node_count"].get<std::size_t>(), d["bytes_per_node"].get<double>(),
+                      d["update_time_ms"]["p50"].get<double>());
+  }
+  if (report.contains("deformation")) {
+    const auto& d = report["deformation"];
+    md += fmt::format("| deformation | {} steps, {:.1f} ms/step (p50), final elastic energy {:.4g} mJ |\n",
+                      d["steps"].get<int>(), d["ms_per_step_p50"].get<double>(),
+                      d["final_energy_mj"]["elastic"].get<double>());
+  }
+  md += "\n## Pictures\n\n";
+  for (const auto& p : report["pictures"])
+    md += fmt::format("![{}]({})\n\n", p["what"].get<std::string>(), p["file"].get<std::string>());
+  md += "## Files\n\n";
+  for (const auto& f : report["files"]) md += fmt::format("- `{}`\n", f.get<std::string>());
+  return md;
+}
+
+void run(const Options& o, const GlobalOptions& g) {
+  const auto start = std::chrono::steady_clock::now();
+  const fs::path dir = o.out_dir;
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec || !fs::is_directory(dir)) throw IoError(o.out_dir, "cannot create the output folder");
+  if (!o.drill_path.empty() && !fs::is_regular_file(o.drill_path))
+    throw IoError(o.drill_path, "--drill-path: no such file");
+  auto progress = make_progress(g.quiet);
+  const auto ct = io::read_volume(o.ct);
+  const auto vessel_seeds = collect_seeds(o.seeds, o.seed_voxels, ct, "--seed", "--seed-voxel");
+  const auto bone_seeds = collect_seeds(o.bone_seeds, o.bone_seed_voxels, ct, "--bone-seed", "--bone-seed-voxel");
+  if (vessel_seeds.empty() && bone_seeds.empty())
+    throw InvalidInput("give at least one --seed (vessel) or --bone-seed (bone)");
+  std::optional<image::Volume<float>> truth;
+  if (!o.truth.empty()) truth = io::read_volume(o.truth);
+
+  json report;
+  report["input"] = o.ct;
+  report["pictures"] = json::array();
+  report["files"] = json::array();
+  auto& files = report["files"];
+  std::vector<Organ> organs;
+  auto add_organ = [&](const std::string& name, const std::vector<Vec3>& seeds, bool bone, int label) {
+    ido::logger().info("segmenting the {} from {} seed(s)", name, seeds.size());
+    organs.push_back(segment_organ(name, ct, seeds, bone, dir, progress.get()));
+    json entry;
+    entry["balloon"] = balloon_json(organs.back().balloon.report);
+    entry["surface_checks"] = mesh_check_json(geometry::check_mesh(organs.back().balloon.surface));
+    if (truth) {
+      const auto t = label_mask(*truth, label);
+      if (std::count(t.data().begin(), t.data().end(), std::uint8_t{1}) > 0)
+        entry["scores"] = scores_json(segment::compare_masks(organs.back().mask, t));
+    }
+    report["segmentation"][name] = entry;
+    files.push_back(name + "_surface.stl");
+    files.push_back(name + "_mask.nii.gz");
+  };
+  if (!vessel_seeds.empty()) add_organ("vessel", vessel_seeds, false, o.vessel_label);
+  if (!bone_seeds.empty()) add_organ("bone", bone_seeds, true, o.bone_label);
+
+  std::vector<const Organ*> organ_ptrs;
+  for (const auto& organ : organs) organ_ptrs.push_back(&organ);
+  organ_pictures(ct, organ_ptrs, vessel_seeds.empty() ? bone_seeds.front() : vessel_seeds.front(), dir,
+                 report["pictures"]);
+
+  // The drillable organ: the bone if one was segmented, else the vessel.
+  const Organ& target = organs.back();
+  const auto tets = mesh_organ(target, o.edge_mm, progress.get());
+  io::write_tet_mesh(dir / (target.name + "_tets.vtu"), tets);
+  files.push_back(target.name + "_tets.vtu");
+  report["tetmesh"] = {{"organ", target.name}, {"quality", tet_quality_json(geometry::check_tet_mesh(tets))}};
+  {
+    viz::Renderer pic(900, 700);
+    auto lo = tets.vertices.front(), hi = lo;
+    for (const auto& v : tets.vertices) {
+      lo = lo.cwiseMin(v);
+      hi = hi.cwiseMax(v);
+    }
+    pic.add_tet_mesh_clipped(tets, {.point = 0.5 * (lo + hi), .normal = Vec3(1, 0, 0)}, "");
+    pic.set_camera(pic.fit_camera(90, 10));
+    pic.write_png(dir / "tetmesh_clip.png");
+    report["pictures"].push_back({{"file", "tetmesh_clip.png"}, {"what", "tetrahedral mesh, cut in half"}});
+  }
+
+  if (!o.drill_path.empty()) {
+    report["drill"] = run_drill(o, tets, ct, dir, report["pictures"]);
+    files.push_back("drilled.vtu");
+    files.push_back("drilled_surface.stl");
+  }
+  if (!o.scene.empty()) {
+    report["simulation"] = run_user_scene(o.scene, dir, progress.get());
+    files.push_back("simulation/");
+  }
+  if (o.deform) {
+    const auto vessel = std::find_if(organs.begin(), organs.end(), [](const Organ& x) { return x.name == "vessel"; });
+    if (vessel == organs.end()) throw InvalidInput("--deform needs a vessel (--seed)");
+    const auto vessel_tets = vessel->name == target.name ? tets : mesh_organ(*vessel, o.edge_mm, progress.get());
+    report["deformation"] = run_deformation(vessel_tets, dir, static_cast<int>(o.deform_steps), report["pictures"],
+                                            progress.get());
+    files.push_back("deformation/");
+  }
+  report["wall_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  files.push_back("report.json");
+  files.push_back("summary.md");
+  write_text_file((dir / "report.json").string(), report.dump(2) + "\n");
+  write_text_file((dir / "summary.md").string(), summary_markdown(report));
+  if (!g.quiet) std::printf("pipeline finished in %.1f s; summary: %s\n", report["wall_time_s"].get<double>(),
+                            (dir / "summary.md").string().c_str());
+}
+
+void setup(CLI::App& app, const GlobalOptions& g) {
+  auto* sub = app.add_subcommand(
+      "pipeline", "CT → balloon segmentation → tetrahedral mesh → drilling and/or deformation, with pictures");
+  auto opts = std::make_shared<Options>();
+  sub->add_option("CT", opts->ct, "CT volume (NIfTI, NRRD, MetaImage, or a DICOM folder)")->required();
+  sub->add_option("--seed", opts->seeds, "Vessel seed X,Y,Z (world mm, LPS); repeatable");
+  sub->add_option("--seed-voxel", opts->seed_voxels, "Vessel seed I,J,K (voxel index); repeatable");
+  sub->add_option("--bone-seed", opts->bone_seeds, "Bone seed X,Y,Z (world mm); repeatable");
+  sub->add_option("--bone-seed-voxel", opts->bone_seed_voxels, "Bone seed I,J,K (voxel index); repeatable");
+  sub->add_option("-o,--output", opts->out_dir, "Output folder (created if missing)")->required();
+  sub->add_option("--drill-path", opts->drill_path, "Drill trajectory CSV (t,x,y,z) through the meshed organ");
+  sub->add_option("--tool", opts->tool, "Burr: sphere:radius=MM[,shaft=MM] (default sphere:radius=2)");
+  sub->add_option("--max-depth", opts->max_depth, "Finest drilling refinement level (default 3)")->check(CLI::Range(0, 8));
+  sub->add_option("--edge", opts->edge_mm, "Tetrahedral lattice spacing (mm); 0 = from the voxel size")
+      ->check(CLI::NonNegativeNumber);
+  sub->add_option("--simulate", opts->scene, "Also run this simulation scene (JSON)");
+  sub->add_flag("--deform", opts->deform, "Deform the segmented vessel (corotational FEM under gravity)");
+  sub->add_option("--deform-steps", opts->deform_steps, "Steps of the deformation (default 60)")
+      ->check(CLI::Range(1, 100000));
+  sub->add_option("--truth", opts->truth, "Label volume to score the segmentations against");
+  sub->add_option("--vessel-label", opts->vessel_label, "Vessel's label in --truth (default 1)");
+  sub->add_option("--bone-label", opts->bone_label, "Bone's label in --truth (default 2)");
+  sub->callback([opts, &g] { run(*opts, g); });
+}
+
+const bool kRegistered = register_command({"pipeline", 60, setup});
+
+}  // namespace
+}  // namespace ido::cli
