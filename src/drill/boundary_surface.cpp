@@ -79,6 +79,7 @@ struct Across {
   NodeRef node;
   int face = -1;
   std::array<int, 4> vmap{-1, -1, -1, -1};
+  std::uint32_t word = TetHierarchy::kErased;  ///< storage word of `node` (boundary: erased)
 };
 
 }  // namespace
@@ -168,13 +169,14 @@ Across root_across(const TetHierarchy& h, std::uint32_t r, int f) {
   for (std::size_t k = 0; k < 4; ++k)
     for (std::size_t k2 = 0; k2 < 4; ++k2)
       if (mine[k] == other[k2]) a.vmap[k] = static_cast<int>(k2);
+  a.word = h.root_word(static_cast<std::size_t>(nb.root));
   return a;
 }
 
-// What lies across face f of child slot s of node p, given what lies across each face of p
-// (`pacr`) and the state of the node across p's faces (`pstate`).
-Across child_across(const NodeRef& p, int s, int f, const std::array<Across, 4>& pacr,
-                    const std::array<NodeState, 4>& pstate) {
+// What lies across face f of child slot s of the internal node p (storage word pword),
+// given what lies across each face of p (`pacr`).
+Across child_across(const TetHierarchy& h, const NodeRef& p, std::uint32_t pword, int s, int f,
+                    const std::array<Across, 4>& pacr) {
   const TreeTable& t = TreeTable::get();
   const auto su = static_cast<std::size_t>(s);
   const auto link = t.face_link[su][static_cast<std::size_t>(f)];
@@ -187,12 +189,13 @@ Across child_across(const NodeRef& p, int s, int f, const std::array<Across, 4>&
       for (std::size_t k2 = 0; k2 < 4; ++k2)
         if (pair_code(t.vertex[s2][k2][0], t.vertex[s2][k2][1]) == code) a.vmap[k] = static_cast<int>(k2);
     }
+    a.word = h.child_word(pword, link.sibling);
     return a;
   }
   const auto pf = static_cast<std::size_t>(link.parent_face);
   const Across& pa = pacr[pf];
   if (pa.boundary) return pa;
-  if (pa.node.depth < p.depth || pstate[pf] != NodeState::Internal) return pa;  // a coarser leaf
+  if (pa.node.depth < p.depth || TetHierarchy::state_of_word(pa.word) != NodeState::Internal) return pa;  // a coarser leaf
   // Same depth as the parent and refined: the child of pa.node holding our face.
   std::array<int, 3> codes{};
   std::array<std::size_t, 3> ks{};
@@ -207,14 +210,15 @@ Across child_across(const NodeRef& p, int s, int f, const std::array<Across, 4>&
   if (!find_child_face(pa.face, codes, c, cg, local)) return {true, {}, -1, {}};  // non-conforming input
   Across a{false, pa.node.child(c), cg, {-1, -1, -1, -1}};
   for (std::size_t j = 0; j < 3; ++j) a.vmap[ks[j]] = local[j];
+  a.word = h.child_word(pa.word, c);
   return a;
 }
 
 // Emits the parts of face `keys` (outward from our side) bordering erased material, where
 // node m (face g) lies across it at the same level; loc[i] is m's local index of keys[i].
 void emit_against(const TetHierarchy& h, const std::array<PointKey, 3>& keys, const std::array<int, 3>& loc,
-                  const NodeRef& m, int g, std::vector<SurfaceFace>& out) {
-  const NodeState st = h.state(m);
+                  const NodeRef& m, std::uint32_t mword, int g, std::vector<SurfaceFace>& out) {
+  const NodeState st = TetHierarchy::state_of_word(mword);
   if (st == NodeState::Full) return;
   if (st == NodeState::Erased) {
     out.push_back(keys);
@@ -238,7 +242,8 @@ void emit_against(const TetHierarchy& h, const std::array<PointKey, 3>& keys, co
     int c = -1, cg = -1;
     std::array<int, 3> local{};
     if (!find_child_face(g, codes, c, cg, local)) continue;
-    emit_against(h, {key_of(sub[0]), key_of(sub[1]), key_of(sub[2])}, local, m.child(c), cg, out);
+    emit_against(h, {key_of(sub[0]), key_of(sub[1]), key_of(sub[2])}, local, m.child(c), h.child_word(mword, c), cg,
+                 out);
   }
 }
 
@@ -314,31 +319,19 @@ void BoundarySurface::update(const TetHierarchy& hierarchy, std::span<const std:
 
 namespace {
 
-// Emits the visible faces of the full leaves of the subtree of n (state st, face
-// neighbours acr with states ast), walking top-down so every node's neighbours come from
-// its parent's in O(1).
+// Emits the visible faces of the full leaves of the subtree of n (storage word `word`,
+// face neighbours acr), walking top-down so every node's neighbours and their states come
+// from its parent's in O(1).
 // NOLINTNEXTLINE(misc-no-recursion): depth ≤ kMaxDepth
-void visit(const TetHierarchy& h, std::size_t r, const NodeRef& n, NodeState st, const std::array<Across, 4>& acr,
-           const std::array<NodeState, 4>& ast, std::vector<SurfaceFace>& out) {
+void visit(const TetHierarchy& h, std::size_t r, const NodeRef& n, std::uint32_t word, const std::array<Across, 4>& acr,
+           std::vector<SurfaceFace>& out) {
+  const NodeState st = TetHierarchy::state_of_word(word);
   if (st == NodeState::Erased) return;
   if (st == NodeState::Internal) {
     for (int c = 0; c < 8; ++c) {
-      const NodeRef ch = n.child(c);
       std::array<Across, 4> cacr;
-      std::array<NodeState, 4> cst{};
-      for (int f = 0; f < 4; ++f) {
-        const auto fu = static_cast<std::size_t>(f);
-        cacr[fu] = child_across(n, c, f, acr, ast);
-        if (cacr[fu].boundary) {
-          cst[fu] = NodeState::Erased;
-        } else if (cacr[fu].node.depth < ch.depth) {
-          // The parent's own neighbour (a leaf no finer than the parent): its state is known.
-          cst[fu] = ast[static_cast<std::size_t>(TreeTable::get().face_link[static_cast<std::size_t>(c)][fu].parent_face)];
-        } else {
-          cst[fu] = h.state(cacr[fu].node);
-        }
-      }
-      visit(h, r, ch, h.state(ch), cacr, cst, out);
+      for (int f = 0; f < 4; ++f) cacr[static_cast<std::size_t>(f)] = child_across(h, n, word, c, f, acr);
+      visit(h, r, n.child(c), h.child_word(word, c), cacr, out);
     }
     return;
   }
@@ -347,7 +340,7 @@ void visit(const TetHierarchy& h, std::size_t r, const NodeRef& n, NodeState st,
   for (int f = 0; f < 4; ++f) {
     const auto fu = static_cast<std::size_t>(f);
     const Across& a = acr[fu];
-    const NodeState other = ast[fu];
+    const NodeState other = TetHierarchy::state_of_word(a.word);
     if (other == NodeState::Full) continue;
     if (!have_geometry) {
       g = h.geometry(n);
@@ -364,7 +357,7 @@ void visit(const TetHierarchy& h, std::size_t r, const NodeRef& n, NodeState st,
     if (other == NodeState::Erased) {
       out.push_back(keys);
     } else {
-      emit_against(h, keys, loc, a.node, a.face, out);
+      emit_against(h, keys, loc, a.node, a.word, a.face, out);
     }
   }
 }
@@ -376,14 +369,8 @@ void BoundarySurface::rebuild_root(const TetHierarchy& hierarchy, std::size_t r)
   out.clear();
   const auto ru = static_cast<std::uint32_t>(r);
   std::array<Across, 4> acr;
-  std::array<NodeState, 4> ast{};
-  for (int f = 0; f < 4; ++f) {
-    const auto fu = static_cast<std::size_t>(f);
-    acr[fu] = root_across(hierarchy, ru, f);
-    ast[fu] = acr[fu].boundary ? NodeState::Erased : hierarchy.state(acr[fu].node);
-  }
-  const NodeRef root{ru, 0, 0};
-  visit(hierarchy, r, root, hierarchy.state(root), acr, ast, out);
+  for (int f = 0; f < 4; ++f) acr[static_cast<std::size_t>(f)] = root_across(hierarchy, ru, f);
+  visit(hierarchy, r, NodeRef{ru, 0, 0}, hierarchy.root_word(r), acr, out);
 }
 
 geometry::TriangleMesh assemble_surface(std::span<const std::vector<SurfaceFace>> v_lists,

@@ -12,9 +12,11 @@ ContactModel collide(const TetHierarchy& hierarchy, const Tool& tool, const Tool
   const Vec3& c = pose.position_mm;
   Vec3 dir = Vec3::Zero();
   int inside = 0;
+  std::int32_t hint = -1;  // consecutive samples are neighbours: start from the last root
   for (const Vec3& s : tool.burr_samples()) {
     const Vec3 p = c + rot * s;
-    const Location loc = hierarchy.locate(p);
+    const Location loc = hierarchy.locate(p, hint);
+    if (loc.inside_mesh) hint = static_cast<std::int32_t>(loc.leaf.root);
     if (loc.inside_mesh && loc.state == NodeState::Full) {
       ++inside;
       dir -= rot * s;  // centre − sample
@@ -32,7 +34,8 @@ ContactModel collide(const TetHierarchy& hierarchy, const Tool& tool, const Tool
       int in_ring = 0;
       for (std::size_t k = start; k < start + static_cast<std::size_t>(ring); ++k) {
         const Vec3 p = c + rot * shaft[k];
-        const Location loc = hierarchy.locate(p);
+        const Location loc = hierarchy.locate(p, hint);
+        if (loc.inside_mesh) hint = static_cast<std::int32_t>(loc.leaf.root);
         if (loc.inside_mesh && loc.state == NodeState::Full) {
           ++in_ring;
           const Vec3 radial(shaft[k].x(), shaft[k].y(), 0.0);

@@ -18,7 +18,9 @@ bool sphere_misses_tet(const std::array<Vec3, 4>& x, const Vec3& c, double r) {
   double rad2 = 0.0;
   for (const auto& v : x) rad2 = std::max(rad2, (v - centroid).squaredNorm());
   const double reach = r + std::sqrt(rad2);
-  if ((c - centroid).squaredNorm() > reach * reach) return true;
+  const double d2 = (c - centroid).squaredNorm();
+  if (d2 > reach * reach) return true;
+  if (d2 <= r * r) return false;  // the centroid is inside the sphere
   static constexpr int kFace[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
   for (int f = 0; f < 4; ++f) {
     const Vec3& a = x[static_cast<std::size_t>(kFace[f][0])];

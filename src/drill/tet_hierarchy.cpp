@@ -343,11 +343,27 @@ Location TetHierarchy::locate(const Vec3& p_mm) const noexcept {
     }
   }
   if (best_root < 0) return loc;
+  return descend(static_cast<std::uint32_t>(best_root), best_lambda);
+}
+
+Location TetHierarchy::locate(const Vec3& p_mm, std::int32_t hint_root) const noexcept {
+  if (hint_root >= 0 && static_cast<std::size_t>(hint_root) < m_roots.size()) {
+    const auto lambda = root_barycentric(static_cast<std::size_t>(hint_root), p_mm);
+    // Strictly inside: no other root of a conforming mesh holds the point, so the hash
+    // look-up would find this root too.
+    if (std::min(std::min(lambda[0], lambda[1]), std::min(lambda[2], lambda[3])) > 0.0)
+      return descend(static_cast<std::uint32_t>(hint_root), lambda);
+  }
+  return locate(p_mm);
+}
+
+Location TetHierarchy::descend(std::uint32_t root, const std::array<double, 4>& root_lambda) const noexcept {
   const TreeTable& t = TreeTable::get();
+  Location loc;
   loc.inside_mesh = true;
-  loc.leaf = NodeRef{static_cast<std::uint32_t>(best_root), 0, 0};
-  std::uint32_t w = m_root_word[static_cast<std::size_t>(best_root)];
-  auto lambda = best_lambda;
+  loc.leaf = NodeRef{root, 0, 0};
+  std::uint32_t w = m_root_word[root];
+  auto lambda = root_lambda;
   while (w != kFull && w != kErased) {
     const int s = TreeTable::locate_child(lambda);
     lambda = t.to_child_coordinates(s, lambda);

@@ -118,6 +118,17 @@ class TetHierarchy {
   /// State of a node; Erased for a node below an erased or full leaf is not meaningful:
   /// the caller walks from the root (see for_each_leaf).
   [[nodiscard]] NodeState state(const NodeRef& node) const noexcept;
+  /// Storage word of root @p r: kFull, kErased, or (internal) the index of its children's
+  /// block. With child_word() it lets a top-down walk read states in O(1) per node.
+  [[nodiscard]] std::uint32_t root_word(std::size_t r) const noexcept { return m_root_word[r]; }
+  /// Word of child slot @p s of an internal node whose word is @p word.
+  [[nodiscard]] std::uint32_t child_word(std::uint32_t word, int s) const noexcept {
+    return m_blocks[word][static_cast<std::size_t>(s)];
+  }
+  /// The state a storage word stands for.
+  [[nodiscard]] static NodeState state_of_word(std::uint32_t word) noexcept {
+    return word == kFull ? NodeState::Full : word == kErased ? NodeState::Erased : NodeState::Internal;
+  }
   /// Splits a full leaf into 8 full children. Returns false (and does nothing) if the node
   /// is not a full leaf or is at kMaxDepth.
   bool refine(const NodeRef& node);
@@ -148,6 +159,10 @@ class TetHierarchy {
   /// The leaf holding @p p_mm: spatial hash → root → descent by TreeTable point location.
   /// Allocates nothing.
   [[nodiscard]] Location locate(const Vec3& p_mm) const noexcept;
+  /// As locate(p_mm), trying root @p hint_root first (e.g. the root of the previous,
+  /// nearby sample; −1: none): when the point lies strictly inside it the hash look-up is
+  /// skipped. Same result as locate(p_mm) for points not on a root face.
+  [[nodiscard]] Location locate(const Vec3& p_mm, std::int32_t hint_root) const noexcept;
 
   /// Calls f(NodeRef, NodeState) for every leaf of root @p r (depth-first).
   template <class F>
@@ -208,6 +223,7 @@ class TetHierarchy {
   using Block = std::array<std::uint32_t, 8>;
   static constexpr std::uint32_t kNoBlock = 0xFFFFFFFDU;
 
+  [[nodiscard]] Location descend(std::uint32_t root, const std::array<double, 4>& root_lambda) const noexcept;
   std::uint32_t* word_of(const NodeRef& node) noexcept;
   [[nodiscard]] std::uint32_t word_at(const NodeRef& node) const noexcept;
   std::uint32_t allocate_block(std::uint32_t fill);
