@@ -181,16 +181,28 @@ Across child_across(const TetHierarchy& h, const NodeRef& p, std::uint32_t pword
   const auto su = static_cast<std::size_t>(s);
   const auto link = t.face_link[su][static_cast<std::size_t>(f)];
   if (link.sibling >= 0) {
-    Across a{false, p.child(link.sibling), link.sibling_face, {-1, -1, -1, -1}};
-    const auto s2 = static_cast<std::size_t>(link.sibling);
-    for (std::size_t k = 0; k < 4; ++k) {
-      if (static_cast<int>(k) == f) continue;
-      const int code = pair_code(t.vertex[su][k][0], t.vertex[su][k][1]);
-      for (std::size_t k2 = 0; k2 < 4; ++k2)
-        if (pair_code(t.vertex[s2][k2][0], t.vertex[s2][k2][1]) == code) a.vmap[k] = static_cast<int>(k2);
-    }
-    a.word = h.child_word(pword, link.sibling);
-    return a;
+    // Tabulated once: for each (slot, face) with a sibling across, the sibling's local index
+    // of each of our vertices (−1 for the vertex opposite the face).
+    static const auto kSiblingMap = [] {
+      std::array<std::array<std::array<int, 4>, 4>, 8> m{};
+      const TreeTable& tt = TreeTable::get();
+      for (std::size_t c = 0; c < 8; ++c)
+        for (std::size_t g = 0; g < 4; ++g) {
+          m[c][g] = {-1, -1, -1, -1};
+          const int sib = tt.face_link[c][g].sibling;
+          if (sib < 0) continue;
+          const auto s2 = static_cast<std::size_t>(sib);
+          for (std::size_t k = 0; k < 4; ++k) {
+            if (k == g) continue;
+            const int code = pair_code(tt.vertex[c][k][0], tt.vertex[c][k][1]);
+            for (std::size_t k2 = 0; k2 < 4; ++k2)
+              if (pair_code(tt.vertex[s2][k2][0], tt.vertex[s2][k2][1]) == code) m[c][g][k] = static_cast<int>(k2);
+          }
+        }
+      return m;
+    }();
+    return Across{false, p.child(link.sibling), link.sibling_face, kSiblingMap[su][static_cast<std::size_t>(f)],
+                  h.child_word(pword, link.sibling)};
   }
   const auto pf = static_cast<std::size_t>(link.parent_face);
   const Across& pa = pacr[pf];
