@@ -71,7 +71,7 @@ void BM_UpdateTime(benchmark::State& state) {
       benchmark::DoNotOptimize(m);
       const int n = std::max(1, static_cast<int>(std::ceil((pose.position_mm - last).norm() / (0.25 * kRadius))));
       for (int k = 1; k <= n; ++k) eroder.erode(h, last + (pose.position_mm - last) * (double(k) / n), kRadius, 1.0, 1e-3 / n);
-      surface.update(h, eroder.changed_roots());
+      surface.update(h, eroder.changed_roots(), eroder.changed_root_faces());
       eroder.clear_changed_roots();
       last = pose.position_mm;
       times.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());

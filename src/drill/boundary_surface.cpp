@@ -309,6 +309,12 @@ void BoundarySurface::rebuild_all(const TetHierarchy& hierarchy) {
 }
 
 void BoundarySurface::update(const TetHierarchy& hierarchy, std::span<const std::uint32_t> changed_roots) {
+  const std::vector<std::uint8_t> all(changed_roots.size(), 0xF);
+  update(hierarchy, changed_roots, all);
+}
+
+void BoundarySurface::update(const TetHierarchy& hierarchy, std::span<const std::uint32_t> changed_roots,
+                             std::span<const std::uint8_t> changed_faces) {
   m_rebuilt.clear();
   auto add = [&](std::uint32_t r) {
     if (!m_mark[r]) {
@@ -316,9 +322,11 @@ void BoundarySurface::update(const TetHierarchy& hierarchy, std::span<const std:
       m_rebuilt.push_back(r);
     }
   };
-  for (const std::uint32_t r : changed_roots) {
+  for (std::size_t i = 0; i < changed_roots.size(); ++i) {
+    const std::uint32_t r = changed_roots[i];
     add(r);
     for (int f = 0; f < 4; ++f) {
+      if (i < changed_faces.size() && ((changed_faces[i] >> f) & 1U) == 0) continue;
       const auto nb = hierarchy.root_neighbor(r, f);
       if (nb.root >= 0) add(static_cast<std::uint32_t>(nb.root));
     }

@@ -74,6 +74,7 @@ int Eroder::finest_level(const TetHierarchy& hierarchy, std::size_t r) const noe
 void Eroder::clear_changed_roots() noexcept {
   for (auto r : m_changed) m_is_changed[r] = 0;
   m_changed.clear();
+  m_changed_faces.clear();
 }
 
 bool Eroder::pay(double cost) noexcept {
@@ -85,18 +86,26 @@ bool Eroder::pay(double cost) noexcept {
 
 // Returns false when the budget ran out (stop everything).
 bool Eroder::process(TetHierarchy& h, const NodeRef& node, const std::array<Vec3, 4>& x, int finest,
-                     ErosionStats& stats) {
+                     const std::array<std::int8_t, 4>& root_face, ErosionStats& stats) {
   const NodeState st = h.state(node);
   if (st == NodeState::Erased) return true;
   if (sphere_misses_tet(x, m_centre, m_radius)) return true;
   const double r2 = m_radius * m_radius;
   bool all_inside = true;
   for (const auto& v : x) all_inside = all_inside && (v - m_centre).squaredNorm() <= r2;
-  auto mark = [&] {
+  std::uint8_t face_mask = 0;
+  for (const auto f : root_face)
+    if (f >= 0) face_mask = static_cast<std::uint8_t>(face_mask | (1U << f));
+  m_face_mask[node.depth] = face_mask;
+  auto mark = [&](std::uint8_t faces) {
     if (!m_is_changed[node.root]) {
       m_is_changed[node.root] = 1;
+      m_slot[node.root] = static_cast<std::uint32_t>(m_changed.size());
       m_changed.push_back(node.root);
+      m_changed_faces.push_back(0);
     }
+    auto& m = m_changed_faces[m_slot[node.root]];
+    m = static_cast<std::uint8_t>(m | faces);
   };
   if (all_inside || node.depth >= finest) {
     if (!all_inside) {
@@ -126,7 +135,11 @@ bool Eroder::process(TetHierarchy& h, const NodeRef& node, const std::array<Vec3
     h.erase(node);
     stats.removed_volume_mm3 += material;
     ++stats.nodes_removed;
-    mark();
+    // Ancestors merged into erased leaves change what lies across their faces too.
+    std::uint8_t faces = face_mask;
+    for (NodeRef a = node; a.depth > 0 && h.state(a.parent()) == NodeState::Erased; a = a.parent())
+      faces = static_cast<std::uint8_t>(faces | m_face_mask[a.depth - 1]);
+    mark(faces);
     return true;
   }
   // Partly covered, above the finest level: descend.
@@ -147,12 +160,17 @@ bool Eroder::process(TetHierarchy& h, const NodeRef& node, const std::array<Vec3
       const auto& e = t.vertex[static_cast<std::size_t>(s)][k];
       c[k] = 0.5 * (x[e[0]] + x[e[1]]);
     }
-    go_on = process(h, node.child(s), c, finest, stats);
+    std::array<std::int8_t, 4> crf{-1, -1, -1, -1};
+    for (std::size_t f = 0; f < 4; ++f) {
+      const int pf = t.face_link[static_cast<std::size_t>(s)][f].parent_face;
+      if (pf >= 0) crf[f] = root_face[static_cast<std::size_t>(pf)];
+    }
+    go_on = process(h, node.child(s), c, finest, crf, stats);
   }
   if (h.state(node) == NodeState::Internal && h.coarsen(node)) {
     if (refined_here) --stats.nodes_refined;  // nothing removed below: undo
   } else if (refined_here) {
-    mark();
+    mark(face_mask);
   }
   return go_on;
 }
@@ -171,7 +189,9 @@ ErosionStats Eroder::erode(TetHierarchy& hierarchy, const Vec3& centre_mm, doubl
   if (m_stamp.size() != n) {
     m_stamp.assign(n, 0);
     m_is_changed.assign(n, 0);
+    m_slot.assign(n, 0);
     m_changed.clear();
+    m_changed_faces.clear();
   }
   if (++m_epoch == 0) {
     std::fill(m_stamp.begin(), m_stamp.end(), 0);
@@ -190,7 +210,8 @@ ErosionStats Eroder::erode(TetHierarchy& hierarchy, const Vec3& centre_mm, doubl
   std::sort(m_candidates.begin(), m_candidates.end());
   for (const std::uint32_t r : m_candidates) {
     const NodeRef root{r, 0, 0};
-    if (!process(hierarchy, root, hierarchy.world_vertices(root), finest_level(hierarchy, r), stats)) break;
+    if (!process(hierarchy, root, hierarchy.world_vertices(root), finest_level(hierarchy, r), {0, 1, 2, 3}, stats))
+      break;
   }
   return stats;
 }

@@ -178,7 +178,7 @@ void Simulator::collision_loop() {
     m_contact_buffer.write(collide(m_hierarchy, m_tool, s.pose));
     // Changed v_lists: rebuild and hand a snapshot to the render consumer.
     if (!m_eroder.changed_roots().empty()) {
-      m_surface.update(m_hierarchy, m_eroder.changed_roots());
+      m_surface.update(m_hierarchy, m_eroder.changed_roots(), m_eroder.changed_root_faces());
       m_eroder.clear_changed_roots();
       for (const std::uint32_t root : m_surface.last_rebuilt()) {
         if (!m_pending_mark[root]) {

@@ -47,6 +47,11 @@ class BoundarySurface {
   /// Rebuilds the v_lists of @p changed_roots and of their face neighbours (a change can
   /// expose a neighbour's face); the rebuilt roots are then in last_rebuilt().
   void update(const TetHierarchy& hierarchy, std::span<const std::uint32_t> changed_roots);
+  /// As above, but the neighbour across root face f of changed_roots[i] is rebuilt only
+  /// when bit f of @p changed_faces[i] is set (Eroder::changed_root_faces(): a changed node
+  /// had a face on that root face), so untouched neighbours are not rebuilt.
+  void update(const TetHierarchy& hierarchy, std::span<const std::uint32_t> changed_roots,
+              std::span<const std::uint8_t> changed_faces);
   /// Rebuilds every v_list.
   void rebuild_all(const TetHierarchy& hierarchy);
 

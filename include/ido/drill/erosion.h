@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -50,6 +51,9 @@ class Eroder {
 
   /// Roots whose nodes changed since the last clear_changed_roots() (each listed once).
   [[nodiscard]] const std::vector<std::uint32_t>& changed_roots() const noexcept { return m_changed; }
+  /// Parallel to changed_roots(): bit f set when a changed node had a face on root face f
+  /// (only then can the face neighbour's v_list change; see BoundarySurface::update).
+  [[nodiscard]] const std::vector<std::uint8_t>& changed_root_faces() const noexcept { return m_changed_faces; }
   void clear_changed_roots() noexcept;
 
   /// Finest level used in root @p r.
@@ -59,7 +63,8 @@ class Eroder {
   [[nodiscard]] double budget() const noexcept { return m_budget; }
 
  private:
-  bool process(TetHierarchy& h, const NodeRef& node, const std::array<Vec3, 4>& x, int finest, ErosionStats& stats);
+  bool process(TetHierarchy& h, const NodeRef& node, const std::array<Vec3, 4>& x, int finest,
+               const std::array<std::int8_t, 4>& root_face, ErosionStats& stats);
   bool pay(double cost) noexcept;
 
   ErosionOptions m_options;
@@ -72,6 +77,9 @@ class Eroder {
   std::uint32_t m_epoch = 0;
   std::vector<std::uint32_t> m_candidates;
   std::vector<std::uint8_t> m_is_changed;
+  std::vector<std::uint8_t> m_changed_faces;
+  std::vector<std::uint32_t> m_slot;  // root → index in m_changed
+  std::array<std::uint8_t, kMaxDepth + 1> m_face_mask{};  // root faces touched per level of the current path
 };
 
 }  // namespace ido::drill
