@@ -37,8 +37,9 @@ struct ErosionStats {
 /// eroded when the tool presses hard enough, partly covered nodes are refined down to a
 /// minimum size). Per call: nodes entirely inside the sphere go whole; partly covered full
 /// leaves are refined until the finest level, where a leaf goes when its centroid is inside
-/// the sphere; refinements that removed nothing are undone (so only the cut's boundary
-/// stays fine). The volume budget grows by removal_rate · dt while the pressing force is at
+/// the sphere; a partly covered full leaf is refined only when a dry run on its derived
+/// geometry finds a descendant that will go (so only the cut's boundary becomes fine, and
+/// nothing is refined and then undone). The volume budget grows by removal_rate · dt while the pressing force is at
 /// least the threshold (capped at 0.1 s worth) and carries over between calls.
 class Eroder {
  public:
