@@ -1,12 +1,14 @@
 // SPDX-License-Identifier: Apache-2.0
 // VTK XML PolyData (.vtp) and UnstructuredGrid (.vtu), following "VTK File Formats"
 // (VTK User's Guide, Kitware). Read: DataArrays in ascii, inline base64 binary, and
-// appended raw or base64 data, UInt32 or UInt64 block headers, uncompressed. Written:
-// inline base64 binary with UInt64 headers (exact), or ascii with 17 significant digits.
+// appended raw or base64 data, UInt32 or UInt64 block headers, uncompressed or compressed by
+// vtkZLibDataCompressor (ParaView's default when saving). Written: inline base64 binary with
+// UInt64 headers (exact), or ascii with 17 significant digits.
 #include <cmath>
 #include <cstring>
 
 #include <fmt/format.h>
+#include <zlib.h>
 
 #include "parsers.h"
 #include "text_parser.h"
@@ -128,6 +130,7 @@ struct VtkDocument {
   std::string_view appended;  ///< bytes after the '_' marker
   bool appended_base64 = false;
   bool big_endian = false;
+  bool zlib = false;  ///< compressor="vtkZLibDataCompressor"
   int header_size = 4;
 
   [[noreturn]] void fail(const XmlNode& at, const std::string& problem) const {
@@ -166,8 +169,11 @@ VtkDocument open_document(std::string_view bytes, const std::string& name, const
   const std::string* type = r.attribute("type");
   if (!type || *type != expected_type)
     doc.fail(r, fmt::format("VTKFile type is '{}', expected '{}'", type ? *type : "", expected_type));
-  if (const auto* c = r.attribute("compressor"); c && !c->empty())
-    doc.fail(r, fmt::format("compressed VTK XML ({}) is not supported; save uncompressed", *c));
+  if (const auto* c = r.attribute("compressor"); c && !c->empty()) {
+    if (*c != "vtkZLibDataCompressor")
+      doc.fail(r, fmt::format("compressor '{}' is not supported (only vtkZLibDataCompressor)", *c));
+    doc.zlib = true;
+  }
   if (const auto* bo = r.attribute("byte_order")) doc.big_endian = *bo == "BigEndian";
   if (const auto* ht = r.attribute("header_type")) {
     if (*ht == "UInt64") doc.header_size = 8;
@@ -195,39 +201,103 @@ std::vector<double> read_array(const VtkDocument& doc, const XmlNode& a, std::si
   const std::string format = fmt_attr ? *fmt_attr : "ascii";
   const std::string array_name = a.attribute("Name") ? *a.attribute("Name") : std::string("(unnamed)");
   std::vector<double> out;
+  const std::size_t need = expected * static_cast<std::size_t>(ti.size);
+  const auto hs = static_cast<std::size_t>(doc.header_size);
+  auto header_value = [&](std::string_view raw, std::size_t i) {
+    return decode_value(raw.data() + i * hs, {doc.header_size, false, false}, doc.big_endian);
+  };
+  auto decode_payload = [&](std::string_view payload) {
+    out.resize(expected);
+    for (std::size_t i = 0; i < expected; ++i)
+      out[i] = decode_value(payload.data() + i * static_cast<std::size_t>(ti.size), ti, doc.big_endian);
+  };
+  // Uncompressed: one header value (the byte count), then the data.
   auto from_bytes = [&](std::string_view raw, const char* where) {
-    if (raw.size() < static_cast<std::size_t>(doc.header_size))
-      doc.fail(a, fmt::format("DataArray '{}': {} data shorter than its header", array_name, where));
-    const double declared = decode_value(raw.data(), {doc.header_size, false, false}, doc.big_endian);
-    const std::size_t need = expected * static_cast<std::size_t>(ti.size);
+    if (raw.size() < hs) doc.fail(a, fmt::format("DataArray '{}': {} data shorter than its header", array_name, where));
+    const double declared = header_value(raw, 0);
     if (declared != static_cast<double>(need))
       doc.fail(a, fmt::format("DataArray '{}' declares {} bytes, expected {} ({} values of {} bytes)", array_name,
                               declared, need, expected, ti.size));
-    if (raw.size() - static_cast<std::size_t>(doc.header_size) < need)
-      doc.fail(a, fmt::format("DataArray '{}': data ends after {} of {} bytes (truncated?)", array_name,
-                              raw.size() - static_cast<std::size_t>(doc.header_size), need));
-    out.resize(expected);
-    const char* p = raw.data() + doc.header_size;
-    for (std::size_t i = 0; i < expected; ++i) out[i] = decode_value(p + i * static_cast<std::size_t>(ti.size), ti, doc.big_endian);
+    if (raw.size() - hs < need)
+      doc.fail(a, fmt::format("DataArray '{}': data ends after {} of {} bytes (truncated?)", array_name, raw.size() - hs,
+                              need));
+    decode_payload(raw.substr(hs, need));
   };
-  /// Base64 text holding header + data, encoded either as one stream or as two blocks.
+  // zlib-compressed ("VTK File Formats", compressed data): a header of [block count,
+  // uncompressed block size, size of the last block (0 = full), compressed size of each
+  // block], then the compressed blocks one after another. Decompression is zlib's.
+  auto header_count = [&](std::string_view header, const char* where) {
+    if (header.size() < 3 * hs)
+      doc.fail(a, fmt::format("DataArray '{}': {} compressed header is truncated", array_name, where));
+    const double n = header_value(header, 0);
+    if (!(n >= 0) || n > 1e9 || n != std::floor(n))
+      doc.fail(a, fmt::format("DataArray '{}': bad compressed block count {}", array_name, n));
+    return static_cast<std::size_t>(n);
+  };
+  auto inflate = [&](std::string_view header, std::string_view blocks, const char* where) {
+    const std::size_t n = header_count(header, where);
+    if (header.size() < (3 + n) * hs)
+      doc.fail(a, fmt::format("DataArray '{}': {} compressed header is truncated", array_name, where));
+    const double block = header_value(header, 1), last = header_value(header, 2);
+    const double total = n == 0 ? 0.0 : block * static_cast<double>(n - 1) + (last > 0 ? last : block);
+    if (total != static_cast<double>(need) || (n > 0 && !(block > 0)))
+      doc.fail(a, fmt::format("DataArray '{}' declares {} uncompressed bytes, expected {} ({} values of {} bytes)",
+                              array_name, total, need, expected, ti.size));
+    std::string payload(need, '\0');
+    std::size_t in_pos = 0, out_pos = 0;
+    for (std::size_t b = 0; b < n; ++b) {
+      const auto csize = static_cast<std::size_t>(header_value(header, 3 + b));
+      const auto usize = static_cast<std::size_t>(b + 1 == n && last > 0 ? last : block);
+      if (in_pos + csize > blocks.size())
+        doc.fail(a, fmt::format("DataArray '{}': compressed block {} ends beyond the data (truncated?)", array_name, b));
+      uLongf got = static_cast<uLongf>(usize);
+      const int rc = ::uncompress(reinterpret_cast<Bytef*>(payload.data() + out_pos), &got,
+                                  reinterpret_cast<const Bytef*>(blocks.data() + in_pos), static_cast<uLong>(csize));
+      if (rc != Z_OK || got != usize)
+        doc.fail(a, fmt::format("DataArray '{}': compressed block {} does not inflate to {} bytes (zlib: {})", array_name,
+                                b, usize, rc == Z_OK ? "short" : zError(rc)));
+      in_pos += csize;
+      out_pos += usize;
+    }
+    decode_payload(payload);
+  };
+  auto b64 = [&](std::string_view text, const char* where) {
+    std::string decoded;
+    if (!base64_decode(text, decoded)) doc.fail(a, fmt::format("DataArray '{}': invalid base64 {} data", array_name, where));
+    return decoded;
+  };
+  /// Base64 text holding header + data, encoded either as one stream or as two blocks
+  /// (always two when compressed: the header's length is known only after its first value).
   auto from_base64 = [&](std::string_view text, const char* where) {
     std::size_t first = 0;
     while (first < text.size() && std::isspace(static_cast<unsigned char>(text[first]))) ++first;
     text.remove_prefix(first);
-    const std::size_t header_chars = (static_cast<std::size_t>(doc.header_size) + 2) / 3 * 4;
-    std::string decoded, part;
-    if (text.substr(0, header_chars).find('=') != std::string_view::npos) {  // separate blocks
-      if (!base64_decode(text.substr(0, header_chars), decoded) || !base64_decode(text.substr(header_chars), part))
-        doc.fail(a, fmt::format("DataArray '{}': invalid base64 {} data", array_name, where));
-      decoded += part;
-    } else if (!base64_decode(text, decoded)) {
-      doc.fail(a, fmt::format("DataArray '{}': invalid base64 {} data", array_name, where));
+    if (doc.zlib) {
+      const std::string lead = b64(text.substr(0, (hs + 2) / 3 * 4), where);
+      const std::size_t n = header_count(lead + std::string(3 * hs, '\0'), where);
+      const std::size_t header_chars = ((3 + n) * hs + 2) / 3 * 4;
+      if (text.size() < header_chars)
+        doc.fail(a, fmt::format("DataArray '{}': {} compressed header is truncated", array_name, where));
+      const std::string header = b64(text.substr(0, header_chars), where);
+      double compressed = 0;  // the data stream's length; appended arrays follow one another
+      for (std::size_t b = 0; b < n; ++b) compressed += header_value(header, 3 + b);
+      const auto data_chars = (static_cast<std::size_t>(compressed) + 2) / 3 * 4;
+      inflate(header, b64(text.substr(header_chars, data_chars), where), where);
+      return;
     }
+    const std::size_t header_chars = (hs + 2) / 3 * 4;
+    std::string decoded = text.substr(0, header_chars).find('=') != std::string_view::npos
+                              ? b64(text.substr(0, header_chars), where) + b64(text.substr(header_chars), where)
+                              : b64(text, where);
     from_bytes(decoded, where);
   };
-  const std::string_view content = doc.root ? std::string_view{} : std::string_view{};
-  (void)content;
+  auto from_raw = [&](std::string_view raw, const char* where) {
+    if (!doc.zlib) return from_bytes(raw, where);
+    const std::size_t n = header_count(raw, where);
+    if (raw.size() < (3 + n) * hs)
+      doc.fail(a, fmt::format("DataArray '{}': {} compressed header is truncated", array_name, where));
+    inflate(raw.substr(0, (3 + n) * hs), raw.substr((3 + n) * hs), where);
+  };
   if (format == "ascii") {
     TextCursor tc(doc.bytes.substr(a.text_begin, a.text_end - a.text_begin), doc.name);
     const std::int64_t base_line = line_at(doc.bytes, a.text_begin) - 1;
@@ -254,7 +324,7 @@ std::vector<double> read_array(const VtkDocument& doc, const XmlNode& a, std::si
                               doc.appended.size()));
     const std::string_view rest = doc.appended.substr(static_cast<std::size_t>(off));
     if (doc.appended_base64) from_base64(rest.substr(0, rest.find_first_of(" \n\r\t")), "appended");
-    else from_bytes(rest, "appended");
+    else from_raw(rest, "appended");
   } else {
     doc.fail(a, fmt::format("DataArray '{}' has unknown format '{}'", array_name, format));
   }

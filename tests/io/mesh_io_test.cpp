@@ -200,14 +200,19 @@ TEST(MeshIoVtk, VtkReadsOurPlyObjStl) {
   }
 }
 
-// Debian 12's VTK 9.1 has no vtkGmshReader: when present, it must see our tetrahedra.
-TEST(MeshIoVtk, VtkReadsOurGmsh) {
-  const auto dir = test::scratch_dir("mesh-vtk-msh");
+// Gmsh itself (python3-gmsh; Debian 12's VTK 9.1 has no vtkGmshReader) reads our .msh files,
+// both format versions, and sees our tetrahedra.
+TEST(MeshIoVtk, GmshReadsOurGmsh) {
+  const auto dir = test::scratch_dir("mesh-gmsh-msh");
   const auto t = cube_tets();
-  write_tet_mesh(dir / "t.msh", t);
-  IDO_VTK_READ(jm, "msh", dir / "t.msh");
-  if (jm.contains("skipped")) GTEST_SKIP() << jm["skipped"].get<std::string>();
-  expect_vtk_mesh(jm, t.vertices, as_cells(t.tets), 0.0);
+  write_tet_mesh(dir / "v4.msh", t);
+  write_tet_mesh(dir / "v2.msh", t, {.gmsh_v2 = true});
+  for (const char* name : {"v4.msh", "v2.msh"}) {
+    SCOPED_TRACE(name);
+    IDO_VTK_READ(jm, "msh", dir / name);
+    if (jm.contains("skipped")) GTEST_SKIP() << jm["skipped"].get<std::string>();
+    expect_vtk_mesh(jm, t.vertices, as_cells(t.tets), 0.0);
+  }
 }
 
 // ---- reading what VTK writes -----------------------------------------------------------
@@ -224,7 +229,7 @@ TEST(MeshIoVtk, ReadsWhatVtkWrites) {
   const std::vector<Vec3> pts = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 1}};
   std::vector<double> disp, stress_tet, stress_tri;
   for (int i = 0; i < 5; ++i) disp.insert(disp.end(), {0.5 * i, -0.25 * i, 0.125 * i});
-  for (const char* mode : {"ascii", "binary", "appended"}) {
+  for (const char* mode : {"ascii", "binary", "appended", "binary-zlib", "appended-zlib", "base64-zlib"}) {
     SCOPED_TRACE(mode);
     ASSERT_TRUE(vtk_write("vtu", mode, dir / (std::string(mode) + ".vtu")));
     const auto t = read_tet_mesh(dir / (std::string(mode) + ".vtu"));
@@ -249,6 +254,44 @@ TEST(MeshIoVtk, ReadsWhatVtkWrites) {
     EXPECT_EQ(s.triangles.size(), 3u);
     EXPECT_EQ(s.vertices.size(), 5u);
   }
+}
+
+// A damaged zlib-compressed file (as ParaView saves) gives an IoError naming the file and the
+// array, never garbage values or a crash.
+TEST(MeshIoVtk, DamagedCompressedVtuIsAnIoError) {
+  if (!test::vtk_read("vtp", "/nonexistent")) GTEST_SKIP() << "python3-vtk9 not available";
+  const auto dir = test::scratch_dir("mesh-zlib-bad");
+  const auto good = dir / "good.vtu";
+  ASSERT_TRUE(vtk_write("vtu", "appended-zlib", good));
+  std::string bytes;
+  {
+    std::ifstream in(good, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  const auto data = bytes.find('_', bytes.find("<AppendedData")) + 1;
+  auto expect_error = [&](const std::string& content, const std::string& name, const std::string& problem) {
+    const auto path = dir / name;
+    std::ofstream(path, std::ios::binary) << content;
+    try {
+      (void)read_tet_mesh(path);
+      ADD_FAILURE() << name << " was read without error";
+    } catch (const IoError& e) {
+      EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(problem), std::string::npos) << e.what();
+    }
+  };
+  // Flip bits inside the first compressed block (after its 4-value UInt64 header, at least).
+  std::string corrupt = bytes;
+  for (std::size_t i = data + 40; i < data + 56; ++i) corrupt[i] = static_cast<char>(corrupt[i] ^ 0x5A);
+  expect_error(corrupt, "corrupt.vtu", "compressed");
+  // Cut the last array's compressed blocks short, keeping the closing tags.
+  const auto close = bytes.rfind("</AppendedData>");
+  const auto end = bytes.find_last_not_of(" \n\r\t", close - 1) + 1;
+  expect_error(bytes.substr(0, end - 6) + bytes.substr(end), "truncated.vtu", "truncated");
+  // An unknown compressor is named.
+  std::string lz4 = bytes;
+  lz4.replace(lz4.find("vtkZLibDataCompressor"), 21, "vtkLZ4DataCompressor");
+  expect_error(lz4, "lz4.vtu", "vtkLZ4DataCompressor");
 }
 
 TEST(MeshIo, PvdRoundTrip) {

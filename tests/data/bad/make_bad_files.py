@@ -58,7 +58,7 @@ w("inverted.vtu", vtu(conn="0 2 1 3"))
 w("degenerate.vtu", vtu(points="0 0 0 1 0 0 0 1 0 1 1 0"))
 w("index_out_of_range.vtu", vtu(conn="0 1 2 8"))
 w("bad_base64.vtu", vtu(fmt="binary", points="!!!!not*base64"))
-w("compressed.vtu", vtu(extra=' compressor="vtkZLibDataCompressor"'))
+w("compressed.vtu", vtu(extra=' compressor="vtkLZMADataCompressor"'))
 w("nonnumeric.vtu", vtu(points="0 0 0 1 0 0 0 1 0 0 0 one"))
 w("nan.vtu", vtu(points="0 0 0 1 0 0 0 1 0 0 0 nan"))
 MSH2 = "$MeshFormat\n{ver} {ft} 8\n$EndMeshFormat\n$Nodes\n{nn}\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 {z}\n$EndNodes\n$Elements\n1\n1 4 2 0 1 1 2 3 {last}\n$EndElements\n"
