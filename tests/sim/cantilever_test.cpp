@@ -32,8 +32,10 @@ double tip_deflection(int cells_through_thickness) {
     if (mesh.vertices[i].x() > kLength - 1e-9) tip.push_back(static_cast<std::int32_t>(i));
   }
   for (auto i : tip) w.external().point_loads.push_back({i, Vec3(0, 0, -kTipLoad / tip.size())});
-  const auto r = sim::solve_static(w, {.max_newton_iterations = 10, .force_tolerance_n = 1e-12});
-  EXPECT_TRUE(r.converged);
+  // Equilibrium to 1e-8 of the applied load: the deflection error studied here is ≥ 1e-3, and
+  // an absolute 1e-12 N sits at the round-off floor of the summed element forces.
+  const auto r = sim::solve_static(w, {.max_newton_iterations = 10, .force_tolerance_n = 1e-8 * kTipLoad});
+  EXPECT_TRUE(r.converged) << "residual " << r.max_residual_force_n << " N after " << r.newton_iterations;
   double sum = 0.0;
   for (auto i : tip) sum += mesh.vertices[static_cast<std::size_t>(i)].z() -
                             w.particles().positions()[static_cast<std::size_t>(i)].z();
