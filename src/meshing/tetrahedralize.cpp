@@ -14,34 +14,15 @@
 #include "ido/core/error.h"
 #include "ido/core/parallel.h"
 #include "ido/meshing/signed_distance.h"
+#include "stuffing_internal.h"
 
 namespace ido::meshing {
 namespace {
 
-using Id = std::int32_t;
-using Coord = std::array<std::int64_t, 3>;  // doubled lattice coordinates
-
-/// Reads the field in world space: trilinear inside the grid, intersected with the box of
-/// the voxel centres outside it (so regions touching the border are closed there).
-class FieldReader {
- public:
-  explicit FieldReader(const image::Volume<float>& field) : m_field(field) {}
-  [[nodiscard]] double operator()(const Vec3& world) const {
-    const Vec3 idx = m_field.world_to_index(world);
-    const double value = m_field.sample_index(idx, image::Boundary::Clamp);
-    // Signed distance (mm, approximate for skewed grids) to the box of voxel centres.
-    Vec3 q;
-    for (int a = 0; a < 3; ++a) {
-      const double hi = double(m_field.size(a) - 1);
-      q[a] = std::max(-idx[a], idx[a] - hi) * m_field.spacing()[a];
-    }
-    const double box = q.maxCoeff() <= 0.0 ? q.maxCoeff() : q.cwiseMax(0.0).norm();
-    return std::max(value, box);
-  }
-
- private:
-  const image::Volume<float>& m_field;
-};
+using detail::Coord;
+using detail::FieldReader;
+using detail::Id;
+using detail::find_cut;
 
 /// The body-centred cubic lattice: black vertices at p0 + h·(i, j, k), red vertices at the
 /// cube centres p0 + h·(i + ½, j + ½, k + ½). Vertex ids: black first, then red. Edges are
@@ -124,179 +105,28 @@ struct Lattice {
   [[nodiscard]] bool is_long(Id u, Id v) const { return is_red(u) == is_red(v); }
 };
 
-/// Root of the field on the segment a → b where fa and fb have opposite signs, as the
-/// fraction t ∈ (0, 1) from a (Illinois variant of regula falsi on the trilinear field).
-double find_cut(const FieldReader& field, const Vec3& a, const Vec3& b, double fa, double fb) {
-  double t0 = 0, t1 = 1, f0 = fa, f1 = fb;
-  double t = f0 / (f0 - f1);
-  int side = 0;
-  for (int it = 0; it < 30; ++it) {
-    t = (t0 * f1 - t1 * f0) / (f1 - f0);
-    const double ft = field(a + t * (b - a));
-    if (ft == 0.0 || (t1 - t0) < 1e-9) break;
-    if ((ft < 0) == (f0 < 0)) {
-      t0 = t;
-      f0 = ft;
-      if (side == -1) f1 *= 0.5;
-      side = -1;
-    } else {
-      t1 = t;
-      f1 = ft;
-      if (side == 1) f0 *= 0.5;
-      side = 1;
-    }
-    if (std::abs(ft) < 1e-12) break;
-  }
-  return std::clamp(t, 1e-6, 1.0 - 1e-6);
-}
-
 constexpr std::size_t kBlock = 2048;
 
-struct Stuffer {
-  const Lattice& L;
-  const std::vector<std::int8_t>& sign;              // per lattice vertex: -1, 0, +1
-  const std::vector<Id>& cut_id;                     // per slot
-  const std::unordered_map<Id, Vec3>& warped;        // snapped lattice vertices
-  const std::vector<Vec3>& cut_pos;                  // per cut id
-  Id nv;                                             // lattice vertex count
+/// The uniform lattice's view for detail::Stuffer.
+struct UniformView {
+  const Lattice& lattice;
+  const std::vector<Id>& cut_id;                // per slot
+  const std::unordered_map<Id, Vec3>& warped;   // snapped lattice vertices
+  const std::vector<Vec3>& cut_pos;             // per cut id
+  Id nv;                                        // lattice vertex count
 
   [[nodiscard]] Vec3 node_position(Id n) const {
     if (n >= nv) return cut_pos[std::size_t(n - nv)];
     auto it = warped.find(n);
-    return it != warped.end() ? it->second : L.position(n);
+    return it != warped.end() ? it->second : lattice.position(n);
   }
-  [[nodiscard]] Id cut(Id u, Id v) const { return nv + cut_id[std::size_t(L.edge_slot(u, v))]; }
-
-  void emit(std::vector<Tet>& out, Id a, Id b, Id c, Id d) const {
-    const Vec3 pa = node_position(a);
-    const double vol =
-        (node_position(b) - pa).dot((node_position(c) - pa).cross(node_position(d) - pa));
-    if (vol > 0) out.push_back({a, b, c, d});
-    else if (vol < 0) out.push_back({a, b, d, c});
-    // a zero-volume tetrahedron cannot come out of the stencils; dropped defensively.
+  [[nodiscard]] Id cut(Id u, Id v) const {
+    return nv + cut_id[std::size_t(lattice.edge_slot(u, v))];
   }
-
-  /// Quadrilateral on the lattice face (a, b, t) where a and b are negative and t positive:
-  /// returns true when the diagonal joins a to cut(b, t), false when it joins b to
-  /// cut(a, t). The rule depends only on the face, so both tetrahedra sharing it agree:
-  /// with a long edge through t, the diagonal joins the cut point on that long edge to the
-  /// opposite lattice vertex; with the long edge a–b, a parity rule on the apex's position
-  /// around the edge picks the end (adjacent apexes around an edge pick opposite ends, so
-  /// the two quadrilaterals of one tetrahedron never make an untetrahedralizable prism).
-  [[nodiscard]] bool diagonal_from_a(Id a, Id b, Id t) const {
-    if (L.is_long(a, t)) return false;  // cut(a,t) on the long edge → joins b
-    if (L.is_long(b, t)) return true;   // cut(b,t) on the long edge → joins a
-    const Coord ca = L.coord(a), cb = L.coord(b), ct = L.coord(t);
-    int axis = 0;
-    while (ca[axis] == cb[axis]) ++axis;
-    std::int64_t s = 0;
-    for (int k = 0; k < 3; ++k)
-      if (k != axis) s += ct[k] - ca[k];
-    const bool odd = s != 0;
-    const bool a_is_min = ca[axis] < cb[axis];
-    return odd == a_is_min;
-  }
-
-  /// Tetrahedralizes the prism with triangles (a0, a1, a2) and (b0, b1, b2), vertical edges
-  /// ai–bi; r[i] says quad i (between i and i+1) is split by ai–b(i+1), -1 = free.
-  void prism(std::vector<Tet>& out, const std::array<Id, 3>& a, const std::array<Id, 3>& b,
-             std::array<int, 3> r) const {
-    for (int i = 0; i < 3; ++i) {
-      if (r[i] >= 0) continue;
-      const int o1 = r[(i + 1) % 3], o2 = r[(i + 2) % 3];
-      if (o1 == 1 && o2 == 1) r[i] = 0;
-      else if (o1 == 0 && o2 == 0) r[i] = 1;
-      else {
-        // both choices valid: the shorter diagonal
-        const int j = (i + 1) % 3;
-        const double dr = (node_position(a[i]) - node_position(b[j])).squaredNorm();
-        const double dl = (node_position(a[j]) - node_position(b[i])).squaredNorm();
-        r[i] = dr <= dl ? 1 : 0;
-      }
-    }
-    for (int i = 0; i < 3; ++i) {
-      const int prev = (i + 2) % 3, n1 = (i + 1) % 3, n2 = (i + 2) % 3;
-      // quad n1 = (a[n1], a[n2], b[n2], b[n1]); R_n1 splits it by a[n1]–b[n2]
-      const std::array<Id, 4> q = {a[n1], a[n2], b[n2], b[n1]};
-      if (r[i] == 1 && r[prev] == 0) {  // a[i] carries two diagonals
-        emit(out, a[i], b[0], b[1], b[2]);
-        pyramid(out, a[i], q, r[n1] == 1);
-        return;
-      }
-      if (r[i] == 0 && r[prev] == 1) {  // b[i] carries two diagonals
-        emit(out, b[i], a[0], a[1], a[2]);
-        pyramid(out, b[i], q, r[n1] == 1);
-        return;
-      }
-    }
-  }
-
-  /// Pyramid with apex @p apex over quad q (cyclic); diag02 = split by q0–q2, else q1–q3.
-  void pyramid(std::vector<Tet>& out, Id apex, const std::array<Id, 4>& q, bool diag02) const {
-    if (diag02) {
-      emit(out, apex, q[0], q[1], q[2]);
-      emit(out, apex, q[0], q[2], q[3]);
-    } else {
-      emit(out, apex, q[0], q[1], q[3]);
-      emit(out, apex, q[1], q[2], q[3]);
-    }
-  }
-
-  /// Replaces the lattice tetrahedron v by its stencil.
-  void stencil(std::vector<Tet>& out, const std::array<Id, 4>& v) const {
-    std::array<Id, 4> neg{}, zer{}, pos{};
-    int nn = 0, nz = 0, np = 0;
-    for (Id x : v) {
-      const int s = sign[std::size_t(x)];
-      if (s < 0) neg[std::size_t(nn++)] = x;
-      else if (s > 0) pos[std::size_t(np++)] = x;
-      else zer[std::size_t(nz++)] = x;
-    }
-    if (np == 0) {
-      // A tetrahedron with four zero vertices lies along the surface and may be nearly
-      // flat (its vertices were warped independently): it is left out, which keeps every
-      // output tetrahedron within the proven dihedral bounds.
-      if (nn > 0) emit(out, v[0], v[1], v[2], v[3]);
-      return;
-    }
-    if (nn == 0) return;
-    if (nn == 1) {
-      const Id n = neg[0];
-      if (np == 3) emit(out, n, cut(n, pos[0]), cut(n, pos[1]), cut(n, pos[2]));
-      else if (np == 2) emit(out, n, zer[0], cut(n, pos[0]), cut(n, pos[1]));
-      else emit(out, n, zer[0], zer[1], cut(n, pos[0]));
-      return;
-    }
-    if (nn == 2 && np == 1) {
-      const Id a = neg[0], b = neg[1], t = pos[0];
-      // quad (a, b, cut(b,t), cut(a,t)); split a–cut(b,t) is q0–q2
-      pyramid(out, zer[0], {a, b, cut(b, t), cut(a, t)}, diagonal_from_a(a, b, t));
-      return;
-    }
-    if (nn == 2 && np == 2) {
-      const Id l = neg[0], r = neg[1], t = pos[0], m = pos[1];
-      // prism: bottom (l, cut(l,t), cut(l,m)), top (r, cut(r,t), cut(r,m))
-      const std::array<Id, 3> a = {l, cut(l, t), cut(l, m)};
-      const std::array<Id, 3> b = {r, cut(r, t), cut(r, m)};
-      // quad 0 = (l, cut(l,t), cut(r,t), r) on face (l, r, t): R = l–cut(r,t)
-      // quad 2 = (cut(l,m), l, r, cut(r,m)) on face (l, r, m): R = cut(l,m)–r
-      const int r0 = diagonal_from_a(l, r, t) ? 1 : 0;
-      const int r2 = diagonal_from_a(l, r, m) ? 0 : 1;
-      prism(out, a, b, {r0, -1, r2});
-      return;
-    }
-    // nn == 3, np == 1: prism between the negative face and its three cut points
-    const Id t = pos[0];
-    const std::array<Id, 3> a = {neg[0], neg[1], neg[2]};
-    const std::array<Id, 3> b = {cut(a[0], t), cut(a[1], t), cut(a[2], t)};
-    std::array<int, 3> r{};
-    for (int i = 0; i < 3; ++i) {
-      // quad i = (a_i, a_{i+1}, b_{i+1}, b_i) on face (a_i, a_{i+1}, t): R = a_i–cut(a_{i+1},t)
-      r[std::size_t(i)] = diagonal_from_a(a[std::size_t(i)], a[std::size_t((i + 1) % 3)], t) ? 1 : 0;
-    }
-    prism(out, a, b, r);
-  }
+  [[nodiscard]] bool is_long(Id u, Id v) const { return lattice.is_long(u, v); }
+  [[nodiscard]] Coord coord(Id v) const { return lattice.coord(v); }
 };
+
 
 }  // namespace
 
@@ -318,9 +148,6 @@ geometry::TetMesh tetrahedralize(const image::Volume<float>& signed_distance_mm,
       throw InvalidInput("tetrahedralize: the signed distance field needs at least 2 voxels "
                          "along every axis");
   }
-  if (options.graded)
-    throw InvalidInput("tetrahedralize: the graded (octree) lattice is not implemented; use "
-                       "graded = false");
   const double h = stuffing_lattice_spacing(signed_distance_mm, options);
 
   // Infinite values (e.g. from an empty mask) would make trilinear weights produce NaN.
@@ -338,6 +165,7 @@ geometry::TetMesh tetrahedralize(const image::Volume<float>& signed_distance_mm,
       field_volume = &clamped;
     }
   }
+  if (options.graded) return detail::tetrahedralize_graded(*field_volume, h, options.threaded, progress);
   const FieldReader field(*field_volume);
 
   Lattice L;
@@ -495,7 +323,8 @@ geometry::TetMesh tetrahedralize(const image::Volume<float>& signed_distance_mm,
   //    (a red edge) carries the 4 tetrahedra of that red edge and the black edges of the
   //    shared face.
   report(progress, 0.6, "tetrahedralize: stencils");
-  const Stuffer stuffer{L, sign, cut_id, warped, cut_pos, Id(nv)};
+  const UniformView view{L, cut_id, warped, cut_pos, Id(nv)};
+  const detail::Stuffer<UniformView> stuffer{view, sign};
   const std::size_t nred = std::size_t(L.nr);
   const std::size_t rblocks = (nred + kBlock - 1) / kBlock;
   std::vector<std::vector<Tet>> block_tets(rblocks);
