@@ -1,7 +1,10 @@
 // SPDX-License-Identifier: Apache-2.0
 // `ido segment CT --seed X,Y,Z | --seed-voxel I,J,K [--reference HU --tolerance HU]
-//  [--roi x0,y0,z0,x1,y1,z1] -o SURFACE [--mask MASK] [--report R.json]`: balloon
-// segmentation. Presentation only: the method is ido::segment::Balloon.
+//  [--roi x0,y0,z0,x1,y1,z1] -o SURFACE [--mask MASK] [--report R.json]
+//  [--snapshots DIR [--snapshot-every N] [--snapshot-size WxH]]`: balloon segmentation.
+// Presentation only: the method is ido::segment::Balloon.
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <optional>
@@ -17,6 +20,8 @@
 #include "ido/io/mesh_io.h"
 #include "ido/io/volume_io.h"
 #include "ido/segment/balloon.h"
+#include "ido/viz/renderer.h"
+#include "snapshots.h"
 
 namespace ido::cli {
 namespace {
@@ -33,7 +38,94 @@ struct SegmentCliOptions {
   std::string report;
   bool bone = false;
   int max_iterations = 4000;
+  std::string snapshots;
+  std::int64_t snapshot_every = 0;  // 0: chosen so that a run gives 15–30 pictures
+  std::string snapshot_size = "1000x500";
 };
+
+/// A surface kept for a picture, after @p step balloon steps.
+struct KeptSurface {
+  std::int64_t step = 0;
+  geometry::TriangleMesh surface;
+};
+
+/// The most pictures the automatic --snapshot-every keeps before thinning (then 15–30).
+constexpr std::size_t kAutoMaxPictures = 30;
+/// Upper bound on the pictures an explicit --snapshot-every may ask for (the surfaces are
+/// kept in memory until the final surface fixes the camera).
+constexpr std::int64_t kMaxPictures = 1000;
+
+/// A balloon run with the surfaces kept on the way.
+struct SteppedRun {
+  segment::BalloonResult result;
+  std::vector<KeptSurface> kept;
+  std::int64_t inflation_steps = 0;  ///< Balloon::step() calls until it reported done
+};
+
+/// Runs the balloon step by step, keeping the surface every @p every steps (doubling
+/// @p every whenever more than kAutoMaxPictures are kept, if @p adaptive), then finishes with
+/// Balloon::run() (edge stage and final repair), which continues from the current state.
+SteppedRun run_keeping_surfaces(segment::Balloon& balloon, std::int64_t every, bool adaptive, Progress* progress,
+                                std::int64_t max_iterations) {
+  SteppedRun out;
+  auto& kept = out.kept;
+  auto& inflation_steps = out.inflation_steps;
+  bool done = false;
+  while (!done) {
+    done = balloon.step();
+    ++inflation_steps;
+    if (inflation_steps % every == 0) kept.push_back({inflation_steps, balloon.surface()});
+    if (adaptive && kept.size() > kAutoMaxPictures) {
+      every *= 2;
+      std::erase_if(kept, [every](const KeptSurface& k) { return k.step % every != 0; });
+    }
+    if (inflation_steps % 50 == 0)
+      report(progress, std::min(0.8, 0.8 * double(inflation_steps) / double(max_iterations)), "inflating");
+  }
+  out.result = balloon.run(progress);
+  return out;
+}
+
+/// One picture: on the left the surface (3-D, camera @p camera), on the right the CT slice
+/// @p slice (a one-voxel-thick sub-volume) with the surface's contour on it in red.
+viz::Image segment_picture(const geometry::TriangleMesh& surface, const viz::Camera& camera,
+                           const image::Volume<float>& slice, const viz::SliceOptions& window, int width,
+                           int height) {
+  const int left_w = width / 2;
+  viz::Renderer left(left_w, height);
+  left.add_surface(surface, Vec3(0.85, 0.55, 0.4));
+  left.set_camera(camera);
+  viz::Renderer right(width - left_w, height);
+  right.add_slice(slice, 2, 0, window);
+  right.add_contour(segment::surface_to_mask(surface, slice), 2, 0);
+  right.set_camera(right.slice_camera(0));
+  return side_by_side(left.render(), right.render());
+}
+
+/// The axial slice (index axis k) through @p seed of @p ct, cropped in i and j to the box
+/// [lo, hi] (mm) with a margin, as a one-voxel-thick volume on the CT's grid.
+image::Volume<float> seed_slice(const image::Volume<float>& ct, const Vec3& seed, const Vec3& lo, const Vec3& hi) {
+  const Vec3 margin = 0.15 * (hi - lo) + 2.0 * ct.spacing().maxCoeff() * Vec3::Ones();
+  Vec3 imin = Vec3::Constant(INFINITY), imax = Vec3::Constant(-INFINITY);
+  for (int c = 0; c < 8; ++c) {
+    const Vec3 corner((c & 1) ? hi.x() + margin.x() : lo.x() - margin.x(), (c & 2) ? hi.y() + margin.y() : lo.y() - margin.y(),
+                      (c & 4) ? hi.z() + margin.z() : lo.z() - margin.z());
+    const Vec3 idx = ct.world_to_index(corner);
+    imin = imin.cwiseMin(idx);
+    imax = imax.cwiseMax(idx);
+  }
+  auto clamp_index = [&](double v, int axis) {
+    return std::clamp<std::int64_t>(static_cast<std::int64_t>(std::lround(v)), 0, ct.size(axis) - 1);
+  };
+  const std::int64_t i0 = clamp_index(std::floor(imin.x()), 0), i1 = clamp_index(std::ceil(imax.x()), 0);
+  const std::int64_t j0 = clamp_index(std::floor(imin.y()), 1), j1 = clamp_index(std::ceil(imax.y()), 1);
+  const std::int64_t k = clamp_index(ct.world_to_index(seed).z(), 2);
+  image::Volume<float> out({i1 - i0 + 1, j1 - j0 + 1, 1}, ct.spacing(),
+                           ct.index_to_world(Vec3(double(i0), double(j0), double(k))), ct.direction());
+  for (std::int64_t j = j0; j <= j1; ++j)
+    for (std::int64_t i = i0; i <= i1; ++i) out(i - i0, j - j0, 0) = ct(i, j, k);
+  return out;
+}
 
 std::array<Vec3, 2> parse_roi(const std::string& text) {
   std::vector<double> v;
@@ -67,6 +159,20 @@ void run(const SegmentCliOptions& o, const GlobalOptions& g) {
     throw InvalidInput(fmt::format("{}: the surface output must be .stl, .ply, .obj or .vtp", o.output));
   if (!o.mask.empty() && !io::looks_like_volume(o.mask))
     throw InvalidInput(fmt::format("{}: the mask output must be a volume file (.nii, .nii.gz, .nrrd, .mha)", o.mask));
+  std::optional<SnapshotWriter> writer;
+  if (!o.snapshots.empty()) {
+    if (o.snapshot_every < 0) throw InvalidInput(fmt::format("--snapshot-every must be >= 1, got {}", o.snapshot_every));
+    if (o.snapshot_every > 0 && o.max_iterations / o.snapshot_every > kMaxPictures)
+      throw InvalidInput(fmt::format("--snapshot-every {} allows up to {} pictures with --max-iterations {}; at most {} "
+                                     "(the surfaces stay in memory until the end): give a larger N",
+                                     o.snapshot_every, o.max_iterations / o.snapshot_every, o.max_iterations,
+                                     kMaxPictures));
+    const auto [w, h] = parse_picture_size(o.snapshot_size, "--snapshot-size");
+    if (w < 2) throw InvalidInput("--snapshot-size: the width must be at least 2 pixels (two panels)");
+    writer.emplace(o.snapshots, SnapshotOptions{.width_px = w, .height_px = h});
+  } else if (o.snapshot_every != 0) {
+    throw InvalidInput("--snapshot-every needs --snapshots DIR");
+  }
   const image::Volume<float> ct = io::read_volume(o.input);
   std::vector<Vec3> seeds;
   for (const auto& s : o.seeds) seeds.push_back(parse_vec3(s, "--seed"));
@@ -83,14 +189,49 @@ void run(const SegmentCliOptions& o, const GlobalOptions& g) {
   bo.max_iterations = o.max_iterations;
   if (!o.roi.empty()) bo.roi_mm = parse_roi(o.roi);
   auto progress = make_progress(g.quiet);
-  const segment::BalloonResult r = segment::segment_balloon(ct, seeds, bo, progress.get());
+  std::vector<KeptSurface> kept;
+  std::int64_t inflation_steps = 0;
+  std::optional<segment::BalloonResult> result;
+  if (writer) {
+    segment::Balloon balloon(ct, seeds, bo);
+    SteppedRun stepped = run_keeping_surfaces(balloon, std::max<std::int64_t>(1, o.snapshot_every),
+                                              o.snapshot_every == 0, progress.get(), bo.max_iterations);
+    result = std::move(stepped.result);
+    kept = std::move(stepped.kept);
+    inflation_steps = stepped.inflation_steps;
+  } else {
+    result = segment::segment_balloon(ct, seeds, bo, progress.get());
+  }
+  const segment::BalloonResult& r = *result;
+  nlohmann::json snapshot_steps = nlohmann::json::array();
+  if (writer) {
+    // The camera frames every kept surface and the final one; the slice is cropped to them.
+    kept.push_back({r.report.iterations, r.surface});
+    Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
+    for (const auto& k : kept)
+      for (const Vec3& p : k.surface.vertices) {
+        lo = lo.cwiseMin(p);
+        hi = hi.cwiseMax(p);
+      }
+    const int left_w = writer->width() / 2;
+    const viz::Camera camera =
+        viz::Camera::orbit(lo, hi, 30.0, 20.0, viz::Projection::Perspective, double(left_w) / writer->height());
+    const image::Volume<float> slice = seed_slice(ct, seeds.front(), lo, hi);
+    const viz::SliceOptions window{.window = 8.0 * r.report.model.tolerance, .level = r.report.model.reference};
+    for (std::size_t i = 0; i < kept.size(); ++i) {
+      check_cancel(progress.get());
+      writer->write(segment_picture(kept[i].surface, camera, slice, window, writer->width(), writer->height()));
+      snapshot_steps.push_back(kept[i].step);
+      report(progress.get(), double(i + 1) / double(kept.size()), "snapshots");
+    }
+  }
   io::write_triangle_mesh(o.output, r.surface);
   if (!o.mask.empty()) io::write_volume(o.mask, segment::surface_to_mask(r.surface, ct));
   const segment::BalloonReport& rep = r.report;
   if (!o.report.empty()) {
     nlohmann::json seeds_json = nlohmann::json::array();
     for (const Vec3& s : seeds) seeds_json.push_back({s.x(), s.y(), s.z()});
-    const nlohmann::json j = {
+    nlohmann::json j = {
         {"input", o.input},
         {"seeds_mm", seeds_json},
         {"reference", rep.model.reference},
@@ -116,6 +257,11 @@ void run(const SegmentCliOptions& o, const GlobalOptions& g) {
         {"leak_warning", rep.leak_warning},
         {"surface", o.output},
         {"mask", o.mask.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.mask)}};
+    if (writer) {
+      j["inflation_steps"] = inflation_steps;
+      j["snapshots"] = writer->files_json();
+      j["snapshot_steps"] = snapshot_steps;
+    }
     write_text_file(o.report, j.dump(2) + "\n");
   }
   if (!g.quiet) {
@@ -127,6 +273,7 @@ void run(const SegmentCliOptions& o, const GlobalOptions& g) {
                 rep.closed ? "closed" : "OPEN", rep.manifold ? "manifold" : "NON-MANIFOLD",
                 static_cast<long long>(rep.self_intersections));
     if (rep.leak_warning) std::printf("warning: the volume was still growing when a safeguard stopped it (leak?)\n");
+    if (writer) std::printf("%zu snapshots written to %s\n", writer->files().size(), o.snapshots.c_str());
   }
 }
 
@@ -144,6 +291,13 @@ void setup(CLI::App& app, const GlobalOptions& g) {
   sub->add_option("-o,--output", opts->output, "surface file (.stl .ply .obj .vtp)")->required();
   sub->add_option("--mask", opts->mask, "binary mask on the input grid (1 inside)");
   sub->add_option("--report", opts->report, "JSON report");
+  sub->add_option("--snapshots", opts->snapshots,
+                  "Folder for pictures of the inflating balloon (snapshot_NNNN.png: surface left, CT slice through "
+                  "the first seed with the contour right; every N steps and the final surface); earlier "
+                  "snapshot_NNNN.png files there are replaced");
+  sub->add_option("--snapshot-every", opts->snapshot_every,
+                  "Picture every this many inflation steps; default: chosen so that a run gives 15-30 pictures");
+  sub->add_option("--snapshot-size", opts->snapshot_size, "Picture size WIDTHxHEIGHT in pixels (two panels); default 1000x500");
   sub->callback([opts, &g] { run(*opts, g); });
 }
 

@@ -1,14 +1,29 @@
 // SPDX-License-Identifier: Apache-2.0
-// `ido simulate SCENE.json -o OUTDIR`: runs a JSON scene (docs/scene.md) and writes VTU
-// frames with a .pvd index, energy.csv, energy.png and report.json.
+// `ido simulate SCENE.json -o OUTDIR [--snapshots DIR [--snapshot-every FRAMES]
+//  [--snapshot-field von_mises|displacement] [--snapshot-size WxH]]`: runs a JSON scene
+// (docs/scene.md) and writes VTU frames with a .pvd index, energy.csv, energy.png,
+// report.json and, on request, pictures of the deforming bodies.
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <fstream>
+#include <limits>
 #include <memory>
+#include <sstream>
 #include <string>
+#include <vector>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include "cli_util.h"
 #include "command.h"
+#include "ido/core/error.h"
+#include "ido/io/mesh_io.h"
 #include "ido/io/scene.h"
 #include "ido/viz/plot.h"
+#include "ido/viz/renderer.h"
+#include "snapshots.h"
 
 namespace ido::cli {
 namespace {
@@ -16,9 +31,100 @@ namespace {
 struct Options {
   std::string scene;
   std::string out_dir;
+  std::string snapshots;
+  int snapshot_every = 1;
+  std::string snapshot_field = "von_mises";
+  std::string snapshot_size = "800x600";
 };
 
+/// The per-tetrahedron value pictured: von Mises stress (Pa) as written by run_scene, or the
+/// mean displacement magnitude (mm) of the tetrahedron's four vertices.
+std::vector<double> picture_values(const geometry::TetMesh& frame, const std::string& field,
+                                   const std::filesystem::path& path) {
+  if (field == "von_mises") {
+    const auto it = frame.cell_fields.find("von_mises_pa");
+    if (it == frame.cell_fields.end() || it->second.count() != frame.tet_count())
+      throw IoError(path.string(), "frame has no von_mises_pa cell field of one value per tetrahedron");
+    std::vector<double> out(frame.tet_count());
+    for (std::size_t t = 0; t < out.size(); ++t)
+      out[t] = it->second.values[t * static_cast<std::size_t>(it->second.components)];
+    return out;
+  }
+  const auto it = frame.point_fields.find("displacement_mm");
+  if (it == frame.point_fields.end() || it->second.components != 3 || it->second.count() != frame.vertex_count())
+    throw IoError(path.string(), "frame has no displacement_mm point field of 3 values per vertex");
+  const auto& d = it->second.values;
+  std::vector<double> out(frame.tet_count(), 0.0);
+  for (std::size_t t = 0; t < out.size(); ++t) {
+    for (const auto v : frame.tets[t]) {
+      const std::size_t i = 3 * static_cast<std::size_t>(v);
+      out[t] += 0.25 * std::sqrt(d[i] * d[i] + d[i + 1] * d[i + 1] + d[i + 2] * d[i + 2]);
+    }
+  }
+  return out;
+}
+
+/// Pictures of the frames run_scene wrote: frame indices 0, every, 2·every, … and the last.
+/// The camera frames the union of all pictured frames' bounding boxes and the colour range is
+/// the min..max of the value over all of them, so the pictures compare.
+nlohmann::json write_snapshots(const Options& o, std::int64_t frames, Progress* progress) {
+  const auto [w, h] = parse_picture_size(o.snapshot_size, "--snapshot-size");
+  SnapshotWriter writer(o.snapshots, {.width_px = w, .height_px = h, .azimuth_deg = 20.0, .elevation_deg = 15.0});
+  std::vector<std::int64_t> picked;
+  for (std::int64_t f = 0; f < frames; ++f)
+    if (f % o.snapshot_every == 0 || f == frames - 1) picked.push_back(f);
+  const std::filesystem::path out_dir(o.out_dir);
+  auto frame_path = [&](std::int64_t f) { return out_dir / fmt::format("frame_{:04d}.vtu", f); };
+  // Pass 1: bounds and value range over the whole run.
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  double vmin = std::numeric_limits<double>::infinity(), vmax = -vmin;
+  for (const auto f : picked) {
+    const auto mesh = io::read_tet_mesh(frame_path(f));
+    for (const Vec3& p : mesh.vertices) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+    for (const double v : picture_values(mesh, o.snapshot_field, frame_path(f))) {
+      vmin = std::min(vmin, v);
+      vmax = std::max(vmax, v);
+    }
+  }
+  if (!(hi.array() >= lo.array()).all()) throw Error("snapshots: the scene's frames have no vertices");
+  if (!(vmax > vmin)) vmax = vmin + std::max(1e-12, std::abs(vmin) * 1e-6);
+  writer.frame(lo, hi);
+  // Pass 2: the pictures.
+  const std::string cell_name = "snapshot_value";
+  for (std::size_t k = 0; k < picked.size(); ++k) {
+    check_cancel(progress);
+    auto mesh = io::read_tet_mesh(frame_path(picked[k]));
+    const auto values = picture_values(mesh, o.snapshot_field, frame_path(picked[k]));
+    mesh.cell_fields[cell_name] = geometry::Field{1, values};
+    viz::Renderer ren(w, h);
+    viz::ClipPlane keep_all;  // a plane beyond the union box clips nothing
+    keep_all.normal = Vec3(1, 0, 0);
+    keep_all.point = Vec3(hi.x() + 1.0, 0, 0);
+    ren.add_tet_mesh_clipped(mesh, keep_all, cell_name,
+                             {.colormap = viz::Colormap::Viridis, .range_min = vmin, .range_max = vmax});
+    writer.write(ren);
+    report(progress, double(k + 1) / double(picked.size()), "snapshots");
+  }
+  nlohmann::json frames_json = nlohmann::json::array();
+  for (const auto f : picked) frames_json.push_back(f);
+  return {{"snapshots", writer.files_json()},
+          {"snapshot_frames", frames_json},
+          {"snapshot_field", o.snapshot_field == "von_mises" ? "von_mises_pa" : "displacement_magnitude_mm"},
+          {"snapshot_range", {vmin, vmax}}};
+}
+
 void run(const Options& o, const GlobalOptions& g) {
+  if (!o.snapshots.empty()) {
+    // Check the picture options before the (long) run.
+    if (o.snapshot_every < 1) throw InvalidInput(fmt::format("--snapshot-every must be >= 1, got {}", o.snapshot_every));
+    if (o.snapshot_field != "von_mises" && o.snapshot_field != "displacement")
+      throw InvalidInput(fmt::format("--snapshot-field must be von_mises or displacement, got '{}'", o.snapshot_field));
+    (void)parse_picture_size(o.snapshot_size, "--snapshot-size");
+    SnapshotWriter check(o.snapshots);  // folder usable (throws naming --snapshots)
+  }
   auto scene = io::load_scene(o.scene);
   auto progress = make_progress(g.quiet);
   const auto result = io::run_scene(scene, o.out_dir, progress.get());
@@ -31,10 +137,27 @@ void run(const Options& o, const GlobalOptions& g) {
   viz::write_line_plot(std::filesystem::path(o.out_dir) / "energy.png", series,
                        {.width_px = 900, .height_px = 540, .title = "Energy",
                         .x_label = "time (s)", .y_label = "energy (mJ)"});
-  if (!g.quiet)
+  std::size_t pictures = 0;
+  if (!o.snapshots.empty()) {
+    const nlohmann::json snap = write_snapshots(o, result.frames, progress.get());
+    pictures = snap["snapshots"].size();
+    // run_scene wrote report.json: add the pictures to it.
+    const auto report_path = std::filesystem::path(o.out_dir) / "report.json";
+    std::ifstream in(report_path);
+    std::stringstream text;
+    text << in.rdbuf();
+    nlohmann::json report_json = nlohmann::json::parse(text.str(), nullptr, false);
+    if (report_json.is_discarded() || !report_json.is_object())
+      throw IoError(report_path.string(), "cannot read back the run's report to add the snapshots");
+    report_json.update(snap);
+    write_text_file(report_path.string(), report_json.dump(2) + "\n");
+  }
+  if (!g.quiet) {
     std::printf("simulated %lld steps in %.3f s, %lld frames written to %s\n",
                 static_cast<long long>(scene.steps), result.wall_time_s,
                 static_cast<long long>(result.frames), o.out_dir.c_str());
+    if (pictures > 0) std::printf("%zu snapshots written to %s\n", pictures, o.snapshots.c_str());
+  }
 }
 
 void setup(CLI::App& app, const GlobalOptions& g) {
@@ -42,6 +165,13 @@ void setup(CLI::App& app, const GlobalOptions& g) {
   auto opts = std::make_shared<Options>();
   sub->add_option("SCENE", opts->scene, "Scene file (.json), see docs/scene.md")->required();
   sub->add_option("-o,--output", opts->out_dir, "Output folder (created if missing)")->required();
+  sub->add_option("--snapshots", opts->snapshots,
+                  "Folder for pictures of the deforming bodies (snapshot_NNNN.png, one fixed camera and "
+                  "colour range for the whole run); earlier snapshot_NNNN.png files there are replaced");
+  sub->add_option("--snapshot-every", opts->snapshot_every, "Picture every this many output frames (and the last); default 1");
+  sub->add_option("--snapshot-field", opts->snapshot_field,
+                  "Colour by von_mises (stress, Pa) or displacement (magnitude, mm); default von_mises");
+  sub->add_option("--snapshot-size", opts->snapshot_size, "Picture size WIDTHxHEIGHT in pixels; default 800x600");
   sub->callback([opts, &g] { run(*opts, g); });
 }
 
