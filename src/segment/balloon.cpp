@@ -100,6 +100,8 @@ struct Balloon::State {
   BalloonReport report;
   std::chrono::steady_clock::time_point start;
   std::int64_t frozen_pending = 0;
+  bool background_decided = false;
+  int background_side = 0;  // see first_transition_limit
 
   geometry::TriangleMesh mesh() const {
     geometry::TriangleMesh m;
@@ -180,6 +182,18 @@ struct Balloon::State {
     const double min_rise = 0.25 * model.tolerance / h;
     const double sigma2 = std::pow(opt.smoothing_sigma_voxels * h, 2) + std::pow(opt.scanner_blur_voxels * h, 2);
     const double edge_k = opt.edge_stop > 0 ? opt.edge_stop * model.tolerance / h : 0.0;
+    // Which side of the band the organ's usual surroundings lie on: the majority of the
+    // first exits along the normals (decided once, at the first edge step).
+    if (edge_stage && !background_decided) {
+      std::vector<int> dir(n, 0);
+      parallel_for(
+          n, [&](std::size_t i) { dir[i] = first_exit_direction(smoothed, x[i], d.normals[i], model, search, 0.2 * h); },
+          opt.threaded, 512);
+      std::int64_t up = 0, down = 0;
+      for (int e : dir) (e > 0 ? up : down) += e != 0 ? 1 : 0;
+      background_side = up > down ? 1 : -1;
+      background_decided = true;
+    }
     // Pass 1: the normal displacement each vertex asks for.
     std::vector<double> normal_mm(n, 0.0);
     std::vector<std::uint8_t> snapped(n, 0);
@@ -194,7 +208,8 @@ struct Balloon::State {
           }
           const double I = smoothed.sample(x[i]);
           if (edge_stage) {
-            const auto t = edge_offset_along_normal(smoothed, x[i], nrm, model, search, 0.2 * h, min_rise, h);
+            auto t = edge_offset_along_normal(smoothed, x[i], nrm, model, search, 0.2 * h, min_rise, h);
+            if (t) t = first_transition_limit(smoothed, x[i], nrm, model, search, 0.2 * h, *t, background_side);
             if (t) {
               // Blur (the scanner's and our pre-smoothing) moves the half-way level of a curved
               // wall inwards by about σ² H (H the mean curvature): add it back.

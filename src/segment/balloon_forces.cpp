@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "ido/segment/balloon_forces.h"
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 namespace ido::segment {
 
@@ -30,6 +32,85 @@ SurfaceDifferentials surface_differentials(const std::vector<Vec3>& x, const std
     d.mean_edge2_mm2[v] /= double(count[v]);
   }
   return d;
+}
+
+int first_exit_direction(const image::Volume<float>& smoothed, const Vec3& p, const Vec3& normal,
+                         const IntensityModel& model, double search_mm, double step_mm) {
+  const int steps = static_cast<int>(std::ceil(search_mm / step_mm));
+  const double lo = model.reference - model.tolerance, hi = model.reference + model.tolerance;
+  bool inside = false;
+  for (int s = -steps; s <= steps; ++s) {
+    const double v = smoothed.sample(p + normal * (s * step_mm));
+    const bool accepted = v >= lo && v <= hi;
+    if (accepted) inside = true;
+    else if (inside) return v > hi ? 1 : -1;
+  }
+  return 0;
+}
+
+double first_transition_limit(const image::Volume<float>& smoothed, const Vec3& p, const Vec3& normal,
+                              const IntensityModel& model, double search_mm, double step_mm, double wall_mm,
+                              int background_side) {
+  // The wall found by the steepest rise may belong to a neighbour across a thin gap (a bone's
+  // steep rim one voxel beyond a vessel). The organ's own wall is on the FIRST transition out
+  // of the accepted band, walking outward from the innermost accepted sample:
+  //  - an exit to the unusual side (for a bright vessel: upward, into a much brighter neighbour
+  //    such as bone, the blurred 1-voxel gap in between showing only as a shallow dip) caps the
+  //    wall at the exit, where |I − reference| = tolerance;
+  //  - a downward exit followed by a rise of more than a tolerance (a resolved dark valley
+  //    between two bright structures) caps it at the half-way crossing between the inside
+  //    level and the valley floor, so the wall never crosses a dark valley.
+  if (background_side == 0 || model.accept_brighter) return wall_mm;
+  // Work on J = σ·I with σ = −background_side, so the usual surroundings lie below the band.
+  const double sg = background_side > 0 ? -1.0 : 1.0;
+  const int steps = static_cast<int>(std::ceil(search_mm / step_mm));
+  const double ref = sg * model.reference;
+  const double lo = ref - model.tolerance, hi = ref + model.tolerance;
+  std::vector<double> I(static_cast<std::size_t>(2 * steps + 1));
+  for (int s = -steps; s <= steps; ++s) I[std::size_t(s + steps)] = sg * smoothed.sample(p + normal * (s * step_mm));
+  auto t_of = [&](std::size_t k) { return (double(k) - steps) * step_mm; };
+  std::size_t k = 0;
+  while (k < I.size() && !(I[k] >= lo && I[k] <= hi)) ++k;  // innermost accepted sample
+  if (k == I.size()) return wall_mm;
+  const std::size_t k_in = k;
+  while (k < I.size() && I[k] >= lo && I[k] <= hi) ++k;
+  if (k == I.size() || k == 0) return wall_mm;
+  if (I[k] > hi) {
+    // Only a clearly brighter neighbour (reaching a further tolerance beyond the band) counts;
+    // a bright fluctuation of the organ itself does not.
+    double peak = -INFINITY;
+    for (std::size_t q = k; q < I.size(); ++q) peak = std::max(peak, I[q]);
+    if (!(peak >= hi + model.tolerance)) return wall_mm;
+    // ... and only across a gap: the profile dips below the reference (by a tenth of the
+    // tolerance, about one σ of the pre-smoothed noise) within 0.75 search_mm (1.5 voxels by
+    // default) before the exit. A bright deposit against the organ (no gap) is left alone.
+    double dip = INFINITY;
+    const auto reach = static_cast<std::size_t>(std::ceil(0.75 * search_mm / step_mm));
+    for (std::size_t q = k > reach ? k - reach : 0; q < k; ++q) dip = std::min(dip, I[q]);
+    if (!(dip <= ref - 0.1 * model.tolerance)) return wall_mm;
+    const double f = (hi - I[k - 1]) / (I[k] - I[k - 1]);
+    return std::min(wall_mm, t_of(k - 1) + f * step_mm);
+  }
+  // Downward exit: follow the valley to its floor, then require a real rise after it.
+  std::size_t floor_k = k;
+  for (std::size_t q = k; q < I.size(); ++q)
+    if (I[q] < I[floor_k]) floor_k = q;
+    else if (I[q] > I[floor_k] + model.tolerance) break;
+  double peak_after = -INFINITY;
+  for (std::size_t q = floor_k; q < I.size(); ++q) peak_after = std::max(peak_after, double(I[q]));
+  if (!(peak_after > I[floor_k] + model.tolerance) || !(wall_mm > t_of(floor_k))) return wall_mm;
+  // Half-way between the inside level (the brightest accepted sample before the exit, at
+  // least the reference, at most the band's edge) and the valley floor.
+  double inside = ref;
+  for (std::size_t q = k_in; q < k; ++q) inside = std::max(inside, double(I[q]));
+  inside = std::min(inside, hi);
+  const double level = 0.5 * (inside + I[floor_k]);
+  for (std::size_t q = k_in + 1; q <= floor_k; ++q)
+    if (I[q] <= level && I[q - 1] > level) {
+      const double f = (I[q - 1] - level) / (I[q - 1] - I[q]);
+      return std::min(wall_mm, t_of(q - 1) + f * step_mm);
+    }
+  return std::min(wall_mm, t_of(floor_k));
 }
 
 std::optional<double> edge_offset_along_normal(const image::Volume<float>& smoothed, const Vec3& p,
@@ -76,19 +157,23 @@ std::optional<double> edge_offset_along_normal(const image::Volume<float>& smoot
     d_out = std::max(d_out, depart(tc + s * step_mm));
   }
   const double half = 0.5 * (d_in + d_out);
-  double prev_t = tc, prev_d = depart(tc);
-  const double dir = prev_d > half ? -1.0 : 1.0;  // walk towards the crossing
-  for (int s = 1; s <= 2 * steps; ++s) {
-    const double t = tc + dir * s * step_mm;
-    const double d = depart(t);
-    if ((d - half) * (prev_d - half) <= 0.0) {
-      const double f = prev_d != d ? (half - prev_d) / (d - prev_d) : 0.5;
-      return prev_t + f * (t - prev_t);
+  double wall = tc;
+  {
+    double prev_t = tc, prev_d = depart(tc);
+    const double dir = prev_d > half ? -1.0 : 1.0;  // walk towards the crossing
+    for (int s = 1; s <= 2 * steps; ++s) {
+      const double t = tc + dir * s * step_mm;
+      const double d = depart(t);
+      if ((d - half) * (prev_d - half) <= 0.0) {
+        const double f = prev_d != d ? (half - prev_d) / (d - prev_d) : 0.5;
+        wall = prev_t + f * (t - prev_t);
+        break;
+      }
+      prev_t = t;
+      prev_d = d;
     }
-    prev_t = t;
-    prev_d = d;
   }
-  return tc;
+  return wall;
 }
 
 }  // namespace ido::segment

@@ -95,6 +95,81 @@ TEST(EdgeOffset, FindsBlurredStepHalfway) {
   EXPECT_FALSE(edge_offset_along_normal(v, Vec3(3, 1.5, 1.5), Vec3::UnitX(), m, 1.5, 0.05, 10.0, 1.0).has_value());
 }
 
+// A profile along x built from pieces [x_k, x_{k+1}) of constant level, blurred by a Gaussian
+// of σ (analytic: sums of normal CDFs), sampled at voxel centres x = i.
+image::Volume<float> blurred_layers(const std::vector<double>& edges, const std::vector<double>& levels, double sigma) {
+  image::Volume<float> v({40, 4, 4}, Vec3(1, 1, 1));
+  auto cdf = [&](double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); };
+  for (std::int64_t i = 0; i < 40; ++i) {
+    double value = levels[0];
+    for (std::size_t e = 0; e < edges.size(); ++e) value += (levels[e + 1] - levels[e]) * cdf((double(i) - edges[e]) / sigma);
+    for (std::int64_t j = 0; j < 4; ++j)
+      for (std::int64_t k = 0; k < 4; ++k) v(i, j, k) = float(value);
+  }
+  return v;
+}
+
+TEST(EdgeOffset, ThinGapToBrightNeighbourStopsAtTheVesselWall) {
+  // Vessel (350) up to x = 10, one voxel of soft tissue (40), bone (1200) from x = 11, all
+  // blurred by σ = 1 voxel (scanner blur and pre-smoothing): the gap shows only as a shallow
+  // dip. The steepest rise of |I − reference| is the bone's rim; the first-transition limit
+  // keeps the wall at the band's exit, within about half a voxel of the true wall (x = 10).
+  const auto v = blurred_layers({10.0, 11.0}, {350, 40, 1200}, 1.0);
+  const IntensityModel m{350, 155};
+  for (double x0 : {9.0, 9.6, 10.2}) {
+    const auto t = edge_offset_along_normal(v, Vec3(x0, 1.5, 1.5), Vec3::UnitX(), m, 2.0, 0.2, 0.25 * 155, 1.0);
+    ASSERT_TRUE(t.has_value());
+    EXPECT_GT(x0 + *t, 10.8) << "the unlimited search should find the bone's rim, x0 = " << x0;
+    const double limited = first_transition_limit(v, Vec3(x0, 1.5, 1.5), Vec3::UnitX(), m, 2.0, 0.2, *t, -1);
+    EXPECT_GE(x0 + limited, 10.0) << x0;
+    EXPECT_LE(x0 + limited, 10.65) << x0;  // the exit I = 505 lies at x ≈ 10.56
+  }
+  // The surroundings are darker than this vessel elsewhere: its usual exit is downward; here
+  // the first exit is upward.
+  EXPECT_EQ(first_exit_direction(v, Vec3(9.6, 1.5, 1.5), Vec3::UnitX(), m, 2.0, 0.2), 1);
+  EXPECT_EQ(first_exit_direction(v, Vec3(9.6, 1.5, 1.5), -Vec3::UnitX(), m, 2.0, 0.2), 0);
+  // Disabled without a known background side, and for bone (accept_brighter).
+  EXPECT_EQ(first_transition_limit(v, Vec3(9.6, 1.5, 1.5), Vec3::UnitX(), m, 2.0, 0.2, 1.5, 0), 1.5);
+  IntensityModel bone = m;
+  bone.accept_brighter = true;
+  EXPECT_EQ(first_transition_limit(v, Vec3(9.6, 1.5, 1.5), Vec3::UnitX(), bone, 2.0, 0.2, 1.5, -1), 1.5);
+}
+
+TEST(EdgeOffset, BrightDepositWithoutGapIsNotACap) {
+  // A much brighter deposit directly against the vessel (no gap, no dip): the limit keeps the
+  // wall found by the steepest rise.
+  const auto v = blurred_layers({10.0}, {350, 1200}, 1.0);
+  const IntensityModel m{350, 155};
+  EXPECT_EQ(first_transition_limit(v, Vec3(9.6, 1.5, 1.5), Vec3::UnitX(), m, 2.0, 0.2, 0.9, -1), 0.9);
+}
+
+TEST(EdgeOffset, OrdinaryWallIsUnchangedAndDarkValleyIsNeverCrossed) {
+  const IntensityModel m{350, 155};
+  // A plain blurred wall to darker tissue: the limit changes nothing.
+  const auto step = blurred_layers({10.0}, {350, 40}, 1.0);
+  for (double wall : {0.3, 0.5, 0.8})
+    EXPECT_EQ(first_transition_limit(step, Vec3(9.6, 1.5, 1.5), Vec3::UnitX(), m, 2.0, 0.2, wall, -1), wall);
+  EXPECT_EQ(first_exit_direction(step, Vec3(9.6, 1.5, 1.5), Vec3::UnitX(), m, 2.0, 0.2), -1);
+  // Two vessels (350) 2 voxels apart across dark tissue (40), σ = 0.7: a wall offered beyond
+  // the valley's floor (x ≈ 11) is pulled back to the first vessel's wall, x = 10. The level
+  // used is half-way between the reference and the sampled floor (≈ 98: the blur lifts the
+  // floor of a 2-voxel valley above 40), 224 instead of 195, which by the profile's slope
+  // (≈ 130 per voxel) puts the wall 0.22 voxel inside the true one: never beyond it.
+  const auto valley = blurred_layers({10.0, 12.0}, {350, 40, 350}, 0.7);
+  const double limited = first_transition_limit(valley, Vec3(10.5, 1.5, 1.5), Vec3::UnitX(), m, 2.0, 0.2, 1.8, -1);
+  EXPECT_LE(10.5 + limited, 10.0);
+  EXPECT_GE(10.5 + limited, 9.75);
+  // A wall offered before the floor is kept.
+  EXPECT_EQ(first_transition_limit(valley, Vec3(10.5, 1.5, 1.5), Vec3::UnitX(), m, 2.0, 0.2, -0.4, -1), -0.4);
+  // The mirror image (a dark organ among brighter tissue, background side +1) behaves alike.
+  auto mirrored = valley;
+  for (float& x : mirrored.data()) x = -x;
+  const IntensityModel dark{-350, 155};
+  const double mirrored_limited =
+      first_transition_limit(mirrored, Vec3(10.5, 1.5, 1.5), Vec3::UnitX(), dark, 2.0, 0.2, 1.8, +1);
+  EXPECT_NEAR(mirrored_limited, limited, 1e-9);
+}
+
 TEST(IntensityModel, RobustEstimateFromSeedNeighbourhood) {
   const auto s = make_volume({30, 30, 30}, Vec3(1, 1, 1), [](const Vec3& p) { return (p - Vec3(15, 15, 15)).norm() < 10; },
                              400.0, 40.0);

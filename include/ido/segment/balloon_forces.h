@@ -67,4 +67,30 @@ struct BalloonForceWeights {
                                                              double step_mm, double min_rise_per_mm,
                                                              double window_mm = 0.0);
 
+/// Direction in which the intensity profile along @p normal first leaves the accepted band,
+/// walking outward from the innermost accepted sample within ±@p search_mm (samples every
+/// @p step_mm): +1 upward (brighter than reference + tolerance), −1 downward, 0 when it does
+/// not leave it (or never enters it). The majority over a surface tells on which side of the
+/// band the organ's usual surroundings lie.
+[[nodiscard]] int first_exit_direction(const image::Volume<float>& smoothed, const Vec3& point_mm,
+                                       const Vec3& normal, const IntensityModel& model, double search_mm,
+                                       double step_mm);
+
+/// The wall model that knows a thin gap: limits a wall offset @p wall_mm found by
+/// edge_offset_along_normal (which takes the steepest rise, possibly a neighbour's rim across
+/// a 1-voxel gap) to the FIRST transition out of the accepted band, walking outward from the
+/// innermost accepted sample. @p background_side is the usual direction of that exit (−1: the
+/// surroundings are darker, as for contrast-filled vessels; +1 brighter; 0 disables). An exit
+/// to the other side into a clearly different neighbour (reaching reference ± 2 tolerances:
+/// bone beside a vessel) after a dip of at least 0.1 tolerance beyond the reference within
+/// 0.75 search_mm before the exit (the blurred 1-voxel gap) caps the wall at the exit
+/// (|I − reference| = tolerance, linear interpolation between samples). An exit to the usual
+/// side followed by a return of more than one tolerance (a resolved dark valley between the
+/// organ and a neighbour) caps it at the half-way crossing between the inside level and the
+/// valley floor, so the wall never crosses a dark valley. Returns @p wall_mm otherwise, and
+/// always when model.accept_brighter. Offsets in mm along the normal.
+[[nodiscard]] double first_transition_limit(const image::Volume<float>& smoothed, const Vec3& point_mm,
+                                            const Vec3& normal, const IntensityModel& model, double search_mm,
+                                            double step_mm, double wall_mm, int background_side);
+
 }  // namespace ido::segment
