@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
-// Tetrahedral meshing of a sphere and a torus: ido's isosurface stuffing against TetGen
+// Tetrahedral meshing of a sphere and a torus: ido's isosurface stuffing (uniform and
+// graded lattice) against TetGen
 // (the `tetgen` Debian program, run as a separate process on the same surfaces; its AGPL
 // code is never linked). Speed in tetrahedra per second, then a quality table.
 //
@@ -75,18 +76,23 @@ const std::vector<Shape>& shapes() {
 void BM_Stuffing(benchmark::State& state) {
   const Shape& shape = shapes()[std::size_t(state.range(0))];
   const bool threaded = state.range(1) != 0;
+  const bool graded = state.range(2) != 0;
   std::size_t tets = 0;
   for (auto _ : state) {
-    const auto mesh = meshing::tetrahedralize(shape.field, {.edge_mm = kEdge, .threaded = threaded});
+    const auto mesh = meshing::tetrahedralize(
+        shape.field, {.edge_mm = kEdge, .graded = graded, .threaded = threaded});
     tets = mesh.tet_count();
     benchmark::DoNotOptimize(mesh.tets.data());
   }
-  state.SetLabel(std::string(shape.name) + (threaded ? " threaded" : " serial"));
+  state.SetLabel(std::string(shape.name) + (graded ? " graded" : "") +
+                 (threaded ? " threaded" : " serial"));
   state.counters["tets"] = double(tets);
   state.counters["tets_per_s"] =
       benchmark::Counter(double(tets), benchmark::Counter::kIsIterationInvariantRate);
 }
-BENCHMARK(BM_Stuffing)->Args({0, 1})->Args({0, 0})->Args({1, 1})->Args({1, 0})
+// args: shape, threaded, graded
+BENCHMARK(BM_Stuffing)->Args({0, 1, 0})->Args({0, 0, 0})->Args({1, 1, 0})->Args({1, 0, 0})
+    ->Args({0, 1, 1})->Args({0, 0, 1})->Args({1, 1, 1})->Args({1, 0, 1})
     ->MeasureProcessCPUTime()->Unit(benchmark::kMillisecond);
 
 // ---- TetGen as a separate program ---------------------------------------------------
@@ -166,13 +172,17 @@ double children_cpu_s() {
 
 /// Runs tetgen on shape i; returns the CPU seconds (user + system) it took, or a negative
 /// value on failure. CPU time, not wall time, because the benchmark machine is shared.
+/// max_volume <= 0: no volume bound (-pq1.414 alone, TetGen's own grading from the surface).
 double run_tetgen(std::size_t i, double max_volume) {
   const Shape& shape = shapes()[i];
   const auto off = work_dir() / (std::string(shape.name) + ".off");
   if (!std::filesystem::exists(off)) write_off(off, shape.surface);
   char cmd[1024];
-  std::snprintf(cmd, sizeof cmd, "tetgen -pq1.414a%.6fQ '%s' > /dev/null 2>&1", max_volume,
-                off.c_str());
+  if (max_volume > 0)
+    std::snprintf(cmd, sizeof cmd, "tetgen -pq1.414a%.6fQ '%s' > /dev/null 2>&1", max_volume,
+                  off.c_str());
+  else
+    std::snprintf(cmd, sizeof cmd, "tetgen -pq1.414Q '%s' > /dev/null 2>&1", off.c_str());
   const double t0 = children_cpu_s();
   const int rc = std::system(cmd);
   const double t1 = children_cpu_s();
@@ -199,7 +209,8 @@ void BM_TetGenProcess(benchmark::State& state) {
     state.SkipWithError("tetgen not installed (scripts/install-deps.sh --bench)");
     return;
   }
-  const double v = kTetGenVolumeFactor * stuffing_mean_volume(i);
+  const bool unbounded = state.range(1) != 0;  // graded: no -a bound
+  const double v = unbounded ? 0.0 : kTetGenVolumeFactor * stuffing_mean_volume(i);
   for (auto _ : state) {
     const double s = run_tetgen(i, v);
     if (s < 0) {
@@ -211,12 +222,14 @@ void BM_TetGenProcess(benchmark::State& state) {
   const auto off = work_dir() / (std::string(shapes()[i].name) + ".off");
   const auto mesh = read_tetgen(work_dir() / (std::string(shapes()[i].name) + ".1"));
   (void)off;
-  state.SetLabel(std::string(shapes()[i].name) + " tetgen -pq1.414a" + std::to_string(v));
+  state.SetLabel(std::string(shapes()[i].name) +
+                 (unbounded ? " tetgen -pq1.414" : " tetgen -pq1.414a" + std::to_string(v)));
   state.counters["tets"] = double(mesh.tet_count());
   state.counters["tets_per_s"] =
       benchmark::Counter(double(mesh.tet_count()), benchmark::Counter::kIsIterationInvariantRate);
 }
-BENCHMARK(BM_TetGenProcess)->Arg(0)->Arg(1)->UseManualTime()->Unit(benchmark::kMillisecond);
+// args: shape, unbounded volume (TetGen's graded mesh, compared with graded stuffing)
+BENCHMARK(BM_TetGenProcess)->Args({0, 0})->Args({1, 0})->Args({0, 1})->Args({1, 1})->UseManualTime()->Unit(benchmark::kMillisecond);
 
 // ---- quality table ------------------------------------------------------------------
 
@@ -274,6 +287,12 @@ int main(int argc, char** argv) {
                       meshing::tetrahedralize(s.field, {.edge_mm = kEdge}), s.exact_volume);
     if (have_tetgen() && run_tetgen(i, kTetGenVolumeFactor * stuffing_mean_volume(i)) >= 0)
       print_quality_row(s.name, "tetgen -pq1.414a(2V)",
+                        read_tetgen(work_dir() / (std::string(s.name) + ".1")), s.exact_volume);
+    print_quality_row(s.name, "ido graded stuffing h=0.8",
+                      meshing::tetrahedralize(s.field, {.edge_mm = kEdge, .graded = true}),
+                      s.exact_volume);
+    if (have_tetgen() && run_tetgen(i, 0.0) >= 0)
+      print_quality_row(s.name, "tetgen -pq1.414 (graded)",
                         read_tetgen(work_dir() / (std::string(s.name) + ".1")), s.exact_volume);
   }
   return 0;
