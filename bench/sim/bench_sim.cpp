@@ -50,6 +50,7 @@ void BM_BeamCorotationalImplicit(benchmark::State& state) {
   const auto split = state.range(3) == 5 ? sim::HexSplit::Five : sim::HexSplit::Six;
   const bool threaded = state.range(4) != 0;
   const int cg_cap = state.range(5) > 0 ? static_cast<int>(state.range(5)) : 1000;
+  const bool jacobi = state.range(6) != 0;
   const auto mesh = sim::make_beam(10.0 * cells.cast<double>(), cells, Vec3::Zero(), split);
   const std::string name = "beam_" + std::to_string(cells.x() + 1) + "x" + std::to_string(cells.y() + 1) +
                            "x" + std::to_string(cells.z() + 1) + "v_" + std::to_string(mesh.tets.size()) + "t";
@@ -66,6 +67,8 @@ void BM_BeamCorotationalImplicit(benchmark::State& state) {
   w.set_integrator("implicit_euler");
   w.implicit_options().cg_tolerance = 1e-6;
   w.implicit_options().cg_max_iterations = cg_cap;
+  w.implicit_options().preconditioner =
+      jacobi ? sim::CgPreconditioner::Jacobi : sim::CgPreconditioner::SymmetricGaussSeidel;
   std::vector<double> ms;
   double cg = 0.0;
   for (auto _ : state) {
@@ -76,16 +79,22 @@ void BM_BeamCorotationalImplicit(benchmark::State& state) {
   }
   state.counters["tets"] = static_cast<double>(mesh.tets.size());
   state.counters["cg_iterations"] = cg / static_cast<double>(state.iterations());
-  report_line(name + (threaded ? "_threads" : "_1core") + (cg_cap < 1000 ? "_cg" + std::to_string(cg_cap) : ""), ms, cg / static_cast<double>(state.iterations()));
+  report_line(name + (threaded ? "_threads" : "_1core") + (cg_cap < 1000 ? "_cg" + std::to_string(cg_cap) : "") +
+                        (jacobi ? "_jacobi" : "_sgs"), ms, cg / static_cast<double>(state.iterations()));
 }
 BENCHMARK(BM_BeamCorotationalImplicit)
-    // cells x, y, z; tets per hex; threads; CG iteration cap (0: none, CG runs to 1e-6)
-    ->Args({4, 12, 4, 5, 0, 0})     // 5×13×5 vertices, 960 tets
-    ->Args({7, 25, 7, 5, 0, 0})     // 8×26×8 vertices, 6125 tets (5 per hex)
-    ->Args({7, 25, 7, 6, 0, 0})     // 8×26×8 vertices, 7350 tets (6 per hex)
-    ->Args({7, 25, 7, 6, 0, 25})    // same, CG capped at 25 iterations as in SOFA's scene
-    ->Args({14, 50, 14, 5, 0, 0})   // 15×51×15 vertices, 49000 tets
-    ->Args({14, 50, 14, 5, 1, 0})
+    // cells x, y, z; tets per hex; threads; CG iteration cap (0: none, CG runs to 1e-6);
+    // preconditioner (0: symmetric block Gauss–Seidel, the default; 1: Jacobi)
+    ->Args({4, 12, 4, 5, 0, 0, 0})     // 5×13×5 vertices, 960 tets
+    ->Args({4, 12, 4, 5, 0, 0, 1})
+    ->Args({7, 25, 7, 5, 0, 0, 0})     // 8×26×8 vertices, 6125 tets (5 per hex)
+    ->Args({7, 25, 7, 5, 0, 0, 1})
+    ->Args({7, 25, 7, 6, 0, 0, 0})     // 8×26×8 vertices, 7350 tets (6 per hex)
+    ->Args({7, 25, 7, 6, 0, 0, 1})
+    ->Args({7, 25, 7, 6, 0, 25, 0})    // same, CG capped at 25 iterations as in SOFA's scene
+    ->Args({7, 25, 7, 6, 0, 25, 1})
+    ->Args({14, 50, 14, 5, 0, 0, 0})   // 15×51×15 vertices, 49000 tets
+    ->Args({14, 50, 14, 5, 1, 0, 0})
     ->Unit(benchmark::kMillisecond)
     ->MinTime(2.0);
 

@@ -36,23 +36,69 @@ double tet_signed_volume(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3
 }
 
 Mat3 extract_rotation(const Mat3& F, Eigen::Quaterniond& q, int max_iterations) {
-  // Müller et al. 2016, Algorithm 1: rotate q by the axis-angle ω that aligns R's columns
-  // with F's columns, until ω vanishes.
-  // Stops when the correction angle is below 1e-12 rad, or below 1e-8 rad and no longer
-  // shrinking (round-off floor).
+  // Maximise f(R) = tr(RᵀF) over rotations (its maximiser is the polar rotation of F, and
+  // for inverted F the rotation closest to F). Each iteration updates R ← R exp([ω]×) in the
+  // body frame. With A = RᵀF and S = sym(A), f(R exp[ω]) = f(R) + ω·g − ½ ωᵀHω + O(ω³) with
+  // g = (A₂₁−A₁₂, A₀₂−A₂₀, A₁₀−A₀₁) and H = tr(A) I − S (derived for this code by expanding
+  // exp([ω]×) to second order).
+  //  - Near the maximiser H is positive definite (its eigenvalues are the pairwise sums of
+  //    S's eigenvalues), and the Newton step ω = H⁻¹g converges quadratically.
+  //  - Elsewhere (H not positive definite, or a Newton step longer than 0.5 rad) the step
+  //    is the one of Müller, Bender, Chentanez & Macklin, "A Robust Method to Extract the
+  //    Rotational Part of Deformations" (MIG 2016, Algorithm 1): ω = g / |tr A|, which
+  //    converges from any start but only linearly (factor ≈ 1/3 per iteration near a pure
+  //    rotation, so ~20 iterations for 1e-12 rad — the reason for the Newton step).
+  // Stops when the step is below 1e-12 rad, below 1e-8 rad and no longer shrinking
+  // (round-off floor), or after a Newton step below 1e-7 rad (the remaining error is then
+  // of the order of its square).
   double previous = 1e300;
+  Mat3 r = q.toRotationMatrix();
   for (int it = 0; it < max_iterations; ++it) {
-    const Mat3 r = q.toRotationMatrix();
-    const Vec3 omega = (r.col(0).cross(F.col(0)) + r.col(1).cross(F.col(1)) + r.col(2).cross(F.col(2))) *
-                       (1.0 / (std::abs(r.col(0).dot(F.col(0)) + r.col(1).dot(F.col(1)) +
-                                        r.col(2).dot(F.col(2))) + 1e-300));
-    const double w = omega.norm();
-    if (w < 1e-12 || (w < 1e-8 && w >= previous)) break;
-    previous = w;
-    q = Eigen::Quaterniond(Eigen::AngleAxisd(w, omega / w)) * q;
+    const Mat3 a = r.transpose() * F;
+    const Vec3 g(a(2, 1) - a(1, 2), a(0, 2) - a(2, 0), a(1, 0) - a(0, 1));
+    const double tr = a.trace();
+    // H = tr I − sym(A), by an unrolled 3×3 LDLᵀ; Newton step when positive definite.
+    const double h00 = tr - a(0, 0), h11 = tr - a(1, 1), h22 = tr - a(2, 2);
+    const double h10 = -0.5 * (a(1, 0) + a(0, 1)), h20 = -0.5 * (a(2, 0) + a(0, 2)),
+                 h21 = -0.5 * (a(2, 1) + a(1, 2));
+    const double pivot_floor = 1e-3 * std::abs(tr);
+    Vec3 w;
+    bool newton = false;
+    if (h00 > pivot_floor) {
+      const double i0 = 1.0 / h00;
+      const double l10 = h10 * i0, l20 = h20 * i0;
+      const double d1 = h11 - l10 * h10;
+      if (d1 > pivot_floor) {
+        const double i1 = 1.0 / d1;
+        const double l21 = (h21 - l20 * h10) * i1;
+        const double d2 = h22 - l20 * h20 - l21 * l21 * d1;
+        if (d2 > pivot_floor) {
+          // Solve L y = g, then D Lᵀ w = y.
+          const double y1 = g.y() - l10 * g.x();
+          const double y2 = g.z() - l20 * g.x() - l21 * y1;
+          w.z() = y2 / d2;
+          w.y() = y1 * i1 - l21 * w.z();
+          w.x() = g.x() * i0 - l10 * w.y() - l20 * w.z();
+          newton = w.squaredNorm() < 0.25;
+        }
+      }
+    }
+    if (!newton) w = g * (1.0 / (std::abs(tr) + 1e-300));
+    const double wn = w.norm();
+    if (wn < 1e-12 || (wn < 1e-8 && wn >= previous)) break;
+    previous = wn;
+    if (newton) {
+      // exp of a short step: unit quaternion (1, ω/2) / norm (rotation angle
+      // 2 atan(|ω|/2) = |ω| + O(|ω|³), which keeps the quadratic convergence).
+      q = q * Eigen::Quaterniond(1.0, 0.5 * w.x(), 0.5 * w.y(), 0.5 * w.z());
+    } else {
+      q = q * Eigen::Quaterniond(Eigen::AngleAxisd(wn, w / wn));
+    }
     q.normalize();
+    r = q.toRotationMatrix();
+    if (newton && wn < 1e-7) break;
   }
-  return q.toRotationMatrix();
+  return r;
 }
 
 TetFemModel::TetFemModel(std::vector<Tet> tets, std::span<const Vec3> rest_positions_mm,
@@ -138,7 +184,8 @@ void TetFemModel::add_forces(const Particles& particles, std::span<Vec3> forces_
                              bool threaded) const {
   update_state(particles, threaded);
   const auto& x = particles.positions();
-  std::vector<Vec3> slots(4 * m_tets.size());
+  auto& slots = m_force_scratch;
+  slots.resize(4 * m_tets.size());
   parallel_for(
       m_tets.size(),
       [&](std::size_t e) {
@@ -195,6 +242,37 @@ void TetFemModel::stiffness_blocks(const Particles& particles, std::span<Mat3> b
         if (m_definite) project_definite(k);
       },
       threaded, 256);
+}
+
+void TetFemModel::add_stiffness_to(const Particles& particles, std::span<const std::int32_t> slots,
+                                   std::span<Mat3> values, bool threaded) const {
+  if (slots.size() != 16 * m_tets.size())
+    throw InvalidInput("FEM model: stiffness slot list does not match the pattern");
+  update_state(particles, threaded);
+  const auto& x = particles.positions();
+  auto scatter = [&](std::size_t e, std::span<const Mat3, 16> k) {
+    for (std::size_t j = 0; j < 16; ++j) {
+      const auto s = slots[16 * e + j];
+      if (s >= 0) values[static_cast<std::size_t>(s)] += k[j];
+    }
+  };
+  if (!threaded) {
+    // One pass: each element's blocks go straight into the matrix.
+    std::array<Mat3, 16> k;
+    for (std::size_t e = 0; e < m_tets.size(); ++e) {
+      const Mat3 F = deformation_gradient(x, m_tets[e], m_dm_inv[e]);
+      element_stiffness(e, F, gradients(e), k);
+      if (m_definite) project_definite(k);
+      scatter(e, k);
+    }
+    return;
+  }
+  // Elements in parallel into a scratch buffer, then added in the same order as above (the
+  // sums are bit-identical to the serial pass).
+  m_block_scratch.resize(16 * m_tets.size());
+  stiffness_blocks(particles, m_block_scratch, true);
+  for (std::size_t e = 0; e < m_tets.size(); ++e)
+    scatter(e, std::span<const Mat3, 16>(m_block_scratch.data() + 16 * e, 16));
 }
 
 std::optional<ElementFields> TetFemModel::element_fields(const Particles& particles) const {

@@ -6,10 +6,15 @@ namespace ido::sim {
 CorotationalFem::CorotationalFem(std::vector<Tet> tets, std::span<const Vec3> rest_positions_mm,
                                  const ElasticMaterial& material)
     : TetFemModel(std::move(tets), rest_positions_mm, material),
-      m_rotation(m_tets.size(), Eigen::Quaterniond::Identity()) {}
+      m_rotation(m_tets.size(), Eigen::Quaterniond::Identity()),
+      m_cached(m_tets.size()) {}
 
 Mat3 CorotationalFem::rotation(std::size_t e, const Mat3& F) const {
-  return extract_rotation(F, m_rotation[e]);
+  auto& c = m_cached[e];
+  if (c.F == F) return c.R;   // same positions as the last call: same (deterministic) result
+  c.R = extract_rotation(F, m_rotation[e]);
+  c.F = F;
+  return c.R;
 }
 
 double CorotationalFem::energy_density(std::size_t e, const Mat3& F) const {
@@ -37,11 +42,13 @@ void CorotationalFem::element_stiffness(std::size_t e, const Mat3& F, const std:
   std::array<Vec3, 4> rb;
   for (std::size_t a = 0; a < 4; ++a) rb[a] = r * b[a];
   const double v = m_volume[e], mu = m_lame.mu, la = m_lame.lambda;
+  // K_ca = K_acᵀ: compute the upper block triangle and transpose it.
   for (std::size_t a = 0; a < 4; ++a)
-    for (std::size_t c = 0; c < 4; ++c) {
+    for (std::size_t c = a; c < 4; ++c) {
       Mat3 k = (v * mu) * rb[c] * rb[a].transpose() + (v * la) * rb[a] * rb[c].transpose();
       k.diagonal().array() += v * mu * b[a].dot(b[c]);
       out[4 * a + c] = k;
+      if (c != a) out[4 * c + a] = k.transpose();
     }
 }
 

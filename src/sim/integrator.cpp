@@ -5,6 +5,8 @@
 #include <cmath>
 #include <string>
 
+#include <Eigen/Cholesky>
+
 #include "ido/core/error.h"
 #include "ido/core/parallel.h"
 #include "ido/sim/units.h"
@@ -126,28 +128,31 @@ void rk4(World& world, double dt_s) {
 
 void World::ImplicitCache::ensure(const World& world) {
   const auto& p = world.particles();
-  if (valid && particle_count == p.size()) return;
   const std::size_t n = p.size();
+  bool same = valid && particle_count == n && fixed.size() == n;
+  for (std::size_t i = 0; same && i < n; ++i) same = (fixed[i] != 0) == p.fixed(i);
+  if (same) return;
   particle_count = n;
-  std::vector<BlockIndex> all;
-  model_first.clear();
-  for (const auto& m : world.models()) {
-    model_first.push_back(all.size());
-    auto pat = m->stiffness_pattern();
-    all.insert(all.end(), pat.begin(), pat.end());
-  }
-  model_first.push_back(all.size());
+  fixed.resize(n);
+  for (std::size_t i = 0; i < n; ++i) fixed[i] = p.fixed(i) ? 1 : 0;
+  const auto models = world.models();
+  std::vector<std::vector<BlockIndex>> patterns(models.size());
   std::vector<std::vector<std::int32_t>> rows(n);
-  for (std::size_t i = 0; i < n; ++i) rows[i].push_back(static_cast<std::int32_t>(i));
-  for (const auto& b : all) {
-    if (b.row < 0 || b.col < 0 || static_cast<std::size_t>(b.row) >= n ||
-        static_cast<std::size_t>(b.col) >= n)
-      throw InvalidInput("implicit Euler: a force model refers to a particle that does not exist");
-    rows[static_cast<std::size_t>(b.row)].push_back(b.col);
+  for (std::size_t i = 0; i < n; ++i)
+    if (!fixed[i]) rows[i].push_back(static_cast<std::int32_t>(i));
+  for (std::size_t m = 0; m < models.size(); ++m) {
+    patterns[m] = models[m]->stiffness_pattern();
+    for (const auto& b : patterns[m]) {
+      if (b.row < 0 || b.col < 0 || static_cast<std::size_t>(b.row) >= n ||
+          static_cast<std::size_t>(b.col) >= n)
+        throw InvalidInput("implicit Euler: a force model refers to a particle that does not exist");
+      if (!fixed[static_cast<std::size_t>(b.row)] && !fixed[static_cast<std::size_t>(b.col)])
+        rows[static_cast<std::size_t>(b.row)].push_back(b.col);
+    }
   }
   row_offset.assign(n + 1, 0);
   col.clear();
-  diag_slot.assign(n, 0);
+  diag_slot.assign(n, -1);
   for (std::size_t i = 0; i < n; ++i) {
     auto& r = rows[i];
     std::sort(r.begin(), r.end());
@@ -158,55 +163,35 @@ void World::ImplicitCache::ensure(const World& world) {
       col.push_back(c);
     }
   }
-  std::vector<std::int32_t> slot_of(all.size());
-  for (std::size_t k = 0; k < all.size(); ++k) {
-    const auto r = static_cast<std::size_t>(all[k].row);
-    const auto first = col.begin() + row_offset[r], last = col.begin() + row_offset[r + 1];
-    slot_of[k] = static_cast<std::int32_t>(std::lower_bound(first, last, all[k].col) - col.begin());
+  model_slots.assign(models.size(), {});
+  for (std::size_t m = 0; m < models.size(); ++m) {
+    auto& slots = model_slots[m];
+    slots.resize(patterns[m].size());
+    for (std::size_t k = 0; k < patterns[m].size(); ++k) {
+      const auto& b = patterns[m][k];
+      const auto r = static_cast<std::size_t>(b.row);
+      if (fixed[r] || fixed[static_cast<std::size_t>(b.col)]) {
+        slots[k] = -1;
+        continue;
+      }
+      const auto first = col.begin() + row_offset[r], last = col.begin() + row_offset[r + 1];
+      slots[k] = static_cast<std::int32_t>(std::lower_bound(first, last, b.col) - col.begin());
+    }
   }
-  // Contributions per slot (counting sort keeps block order within a slot).
-  slot_offset.assign(col.size() + 1, 0);
-  for (auto s : slot_of) ++slot_offset[static_cast<std::size_t>(s) + 1];
-  for (std::size_t s = 0; s < col.size(); ++s) slot_offset[s + 1] += slot_offset[s];
-  slot_sources.resize(all.size());
-  std::vector<std::int32_t> fill(slot_offset.begin(), slot_offset.end() - 1);
-  for (std::size_t k = 0; k < all.size(); ++k)
-    slot_sources[static_cast<std::size_t>(fill[static_cast<std::size_t>(slot_of[k])]++)] =
-        static_cast<std::int32_t>(k);
-  model_blocks.assign(all.size(), Mat3::Zero());
   values.assign(col.size(), Mat3::Zero());
+  precond.assign(n, Mat3::Zero());
   if (warm_dv.size() != n) warm_dv.assign(n, Vec3::Zero());
+  for (auto* v : {&b, &r, &z, &d, &q, &dv, &kv}) v->assign(n, Vec3::Zero());
   valid = true;
 }
 
 void World::ImplicitCache::assemble(const World& world) {
+  std::fill(values.begin(), values.end(), Mat3::Zero());
   const auto models = world.models();
-  for (std::size_t m = 0; m < models.size(); ++m) {
-    const std::size_t b = model_first[m], e = model_first[m + 1];
-    if (e > b)
-      models[m]->stiffness_blocks(world.particles(),
-                                  std::span<Mat3>(model_blocks.data() + b, e - b), world.threaded());
-  }
-  parallel_for(
-      values.size(),
-      [&](std::size_t s) {
-        Mat3 sum = Mat3::Zero();
-        for (auto k = slot_offset[s]; k < slot_offset[s + 1]; ++k)
-          sum += model_blocks[static_cast<std::size_t>(slot_sources[static_cast<std::size_t>(k)])];
-        values[s] = sum;
-      },
-      world.threaded(), 4096);
+  for (std::size_t m = 0; m < models.size(); ++m)
+    if (!model_slots[m].empty())
+      models[m]->add_stiffness_to(world.particles(), model_slots[m], values, world.threaded());
 }
-
-namespace {
-
-double dot(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
-  double s = 0.0;
-  for (std::size_t i = 0; i < a.size(); ++i) s += a[i].dot(b[i]);
-  return s;
-}
-
-}  // namespace
 
 namespace integrators {
 
@@ -226,62 +211,124 @@ void implicit_euler(World& world, double dt_s) {
   auto& x = p.positions();
   const auto& mass = p.masses();
 
-  const double am = 1.0 + dt_s * damping.mass_per_s;         // × M'
-  const double ak = dt_s * damping.stiffness_s + dt_s * dt_s; // × K
-  std::vector<char> free(n);
-  for (std::size_t i = 0; i < n; ++i) free[i] = p.fixed(i) ? 0 : 1;
-
-  auto k_times = [&](const std::vector<Vec3>& y, std::vector<Vec3>& out) {
-    parallel_for(
-        n,
-        [&](std::size_t i) {
-          Vec3 s = Vec3::Zero();
-          for (auto k = cache.row_offset[i]; k < cache.row_offset[i + 1]; ++k) {
-            const auto c = static_cast<std::size_t>(cache.col[static_cast<std::size_t>(k)]);
-            if (free[c]) s += cache.values[static_cast<std::size_t>(k)] * y[c];
-          }
-          out[i] = s;
-        },
-        threaded, 512);
+  // System (M' + ak K) Δv = dt (f − dt K v), M' = (1 + dt α) M, ak = dt β + dt².
+  const double am = 1.0 + dt_s * damping.mass_per_s;
+  const double ak = dt_s * damping.stiffness_s + dt_s * dt_s;
+  const auto& row_offset = cache.row_offset;
+  const auto& col = cache.col;
+  const auto& values = cache.values;
+  const auto& fixed = cache.fixed;
+  auto mass_term = [&](std::size_t i) { return am * kKgMmPerS2ToNewton * mass[i]; };
+  // (K y)_i over the free block; y is zero on fixed particles, whose rows are empty.
+  auto k_row = [&](const std::vector<Vec3>& y, std::int32_t begin, std::int32_t end) {
+    Vec3 s = Vec3::Zero();
+    for (auto k = begin; k < end; ++k)
+      s.noalias() += values[static_cast<std::size_t>(k)] * y[static_cast<std::size_t>(col[static_cast<std::size_t>(k)])];
+    return s;
   };
+  // out = A y; returns y·out (serial sum in index order, so threaded runs give the same bits).
   auto a_times = [&](const std::vector<Vec3>& y, std::vector<Vec3>& out) {
-    k_times(y, out);
-    for (std::size_t i = 0; i < n; ++i)
-      out[i] = free[i] ? Vec3(am * kKgMmPerS2ToNewton * mass[i] * y[i] + ak * out[i]) : y[i];
+    auto row = [&](std::size_t i) {
+      out[i] = fixed[i] ? Vec3::Zero()
+                        : Vec3(mass_term(i) * y[i] + ak * k_row(y, row_offset[i], row_offset[i + 1]));
+    };
+    double dot = 0.0;
+    if (threaded) {
+      parallel_for(n, row, true, 256);
+      for (std::size_t i = 0; i < n; ++i) dot += y[i].dot(out[i]);
+    } else {
+      for (std::size_t i = 0; i < n; ++i) {
+        row(i);
+        dot += y[i].dot(out[i]);
+      }
+    }
+    return dot;
   };
 
-  // b = dt (f − dt K v)
-  std::vector<Vec3> kv(n), b(n);
-  k_times(v, kv);
-  for (std::size_t i = 0; i < n; ++i)
-    b[i] = free[i] ? Vec3(dt_s * (f[i] - dt_s * kv[i])) : Vec3::Zero();
-  std::vector<Vec3> inv_diag(n);
+  // Preconditioner blocks. Jacobi: inverse diagonal of A. Gauss–Seidel: inverse 3×3 diagonal
+  // block of A, or the Jacobi diagonal where that block is not positive definite (the
+  // preconditioner stays symmetric positive definite either way).
+  const bool sgs = opts.preconditioner == CgPreconditioner::SymmetricGaussSeidel;
   for (std::size_t i = 0; i < n; ++i) {
-    const double mterm = am * kKgMmPerS2ToNewton * mass[i];
-    const Mat3& kd = cache.values[static_cast<std::size_t>(cache.diag_slot[i])];
-    for (int c = 0; c < 3; ++c) {
-      const double d = mterm + ak * kd(c, c);
-      inv_diag[i][c] = free[i] ? 1.0 / (d > 0.0 ? d : mterm) : 1.0;
+    auto& pc = cache.precond[i];
+    if (fixed[i]) {
+      pc.setZero();
+      continue;
     }
+    const double mterm = mass_term(i);
+    const Mat3 dblock = mterm * Mat3::Identity() + ak * values[static_cast<std::size_t>(cache.diag_slot[i])];
+    if (sgs) {
+      const Eigen::LLT<Mat3> llt(dblock);
+      if (llt.info() == Eigen::Success) {
+        pc = llt.solve(Mat3::Identity());
+        continue;
+      }
+    }
+    pc.setZero();
+    for (int c = 0; c < 3; ++c) pc(c, c) = 1.0 / (dblock(c, c) > 0.0 ? dblock(c, c) : mterm);
   }
+  auto& r = cache.r;
+  auto& z = cache.z;
+  // z = P⁻¹ r; returns r·z.
+  auto precondition = [&]() {
+    double rz = 0.0;
+    if (!sgs) {
+      for (std::size_t i = 0; i < n; ++i) {
+        z[i].noalias() = cache.precond[i] * r[i];
+        rz += r[i].dot(z[i]);
+      }
+      return rz;
+    }
+    // Forward sweep (D + L) y = r, then backward (D + Lᵀ) z = D y, in place in z.
+    for (std::size_t i = 0; i < n; ++i) {
+      if (fixed[i]) continue;
+      const Vec3 s = r[i] - ak * k_row(z, row_offset[i], cache.diag_slot[i]);
+      z[i].noalias() = cache.precond[i] * s;
+    }
+    for (std::size_t i = n; i-- > 0;) {
+      if (fixed[i]) continue;
+      const Vec3 s = ak * k_row(z, cache.diag_slot[i] + 1, row_offset[i + 1]);
+      z[i].noalias() -= cache.precond[i] * s;
+      rz += r[i].dot(z[i]);
+    }
+    return rz;
+  };
+
+  // b = dt (f − dt K v) on free particles.
+  auto& b = cache.b;
+  auto& kv = cache.kv;
+  auto& vfree = cache.d;   // scratch: v with fixed particles zeroed
+  for (std::size_t i = 0; i < n; ++i) vfree[i] = fixed[i] ? Vec3::Zero() : v[i];
+  parallel_for(
+      n, [&](std::size_t i) { kv[i] = k_row(vfree, row_offset[i], row_offset[i + 1]); }, threaded, 256);
+  double bb = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    b[i] = fixed[i] ? Vec3::Zero() : Vec3(dt_s * (f[i] - dt_s * kv[i]));
+    bb += b[i].squaredNorm();
+  }
+
   // Preconditioned conjugate gradients (Shewchuk, "An Introduction to the Conjugate Gradient
   // Method Without the Agonizing Pain", 1994, §B3).
-  std::vector<Vec3> dv(n, Vec3::Zero());
-  if (opts.warm_start && cache.warm_dv.size() == n)
-    for (std::size_t i = 0; i < n; ++i) dv[i] = free[i] ? cache.warm_dv[i] : Vec3::Zero();
-  std::vector<Vec3> r(n), z(n), d(n), q(n);
-  a_times(dv, q);
-  for (std::size_t i = 0; i < n; ++i) r[i] = b[i] - q[i];
-  const double bnorm = std::sqrt(dot(b, b));
+  auto& dv = cache.dv;
+  auto& d = cache.d;
+  auto& q = cache.q;
+  const bool warm = opts.warm_start && cache.warm_dv.size() == n;
+  for (std::size_t i = 0; i < n; ++i) dv[i] = (warm && !fixed[i]) ? cache.warm_dv[i] : Vec3::Zero();
+  (void)a_times(dv, q);
+  double rr = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    r[i] = b[i] - q[i];
+    rr += r[i].squaredNorm();
+  }
+  const double bnorm = std::sqrt(bb);
   int it = 0;
-  double rnorm = std::sqrt(dot(r, r));
+  double rnorm = std::sqrt(rr);
   if (bnorm > 0.0 && rnorm > opts.cg_tolerance * bnorm) {
-    for (std::size_t i = 0; i < n; ++i) z[i] = inv_diag[i].cwiseProduct(r[i]);
+    std::fill(z.begin(), z.end(), Vec3::Zero());
+    double rz = precondition();
     d = z;
-    double rz = dot(r, z);
     while (it < opts.cg_max_iterations) {
-      a_times(d, q);
-      const double dq = dot(d, q);
+      const double dq = a_times(d, q);
       if (!(dq > 0.0)) {
         // Not positive definite along d: keep the progress made; never re-apply a stale
         // warm start.
@@ -289,15 +336,16 @@ void implicit_euler(World& world, double dt_s) {
         break;
       }
       const double alpha = rz / dq;
+      rr = 0.0;
       for (std::size_t i = 0; i < n; ++i) {
         dv[i] += alpha * d[i];
         r[i] -= alpha * q[i];
+        rr += r[i].squaredNorm();
       }
       ++it;
-      rnorm = std::sqrt(dot(r, r));
+      rnorm = std::sqrt(rr);
       if (rnorm <= opts.cg_tolerance * bnorm) break;
-      for (std::size_t i = 0; i < n; ++i) z[i] = inv_diag[i].cwiseProduct(r[i]);
-      const double rz_new = dot(r, z);
+      const double rz_new = precondition();
       const double beta = rz_new / rz;
       rz = rz_new;
       for (std::size_t i = 0; i < n; ++i) d[i] = z[i] + beta * d[i];
@@ -308,7 +356,7 @@ void implicit_euler(World& world, double dt_s) {
   stats.cg_relative_residual = bnorm > 0.0 ? rnorm / bnorm : 0.0;
   cache.warm_dv = dv;
   for (std::size_t i = 0; i < n; ++i) {
-    if (!free[i]) continue;
+    if (fixed[i]) continue;
     v[i] += dv[i];
     x[i] += dt_s * v[i];
   }

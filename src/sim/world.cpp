@@ -18,6 +18,14 @@ namespace ido::sim {
 
 void ForceModel::stiffness_blocks(const Particles&, std::span<Mat3>, bool) const {}
 
+void ForceModel::add_stiffness_to(const Particles& particles, std::span<const std::int32_t> slots,
+                                  std::span<Mat3> values, bool threaded) const {
+  std::vector<Mat3> blocks(slots.size());
+  stiffness_blocks(particles, blocks, threaded);
+  for (std::size_t k = 0; k < slots.size(); ++k)
+    if (slots[k] >= 0) values[static_cast<std::size_t>(slots[k])] += blocks[k];
+}
+
 void ForceModel::add_stiffness_product(const Particles& particles, std::span<const Vec3> dx_mm,
                                        std::span<Vec3> out_n) const {
   const auto pattern = stiffness_pattern();

@@ -34,10 +34,12 @@ struct Lame {
 /// Signed volume (mm³) of tetrahedron (a, b, c, d): (b−a)·((c−a)×(d−a)) / 6.
 [[nodiscard]] double tet_signed_volume(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d);
 
-/// Rotation of the polar decomposition F = R S, by the iterative method of Müller, Bender,
-/// Chentanez & Macklin, "A Robust Method to Extract the Rotational Part of Deformations"
-/// (MIG 2016), started from @p q (updated in place with the result: warm start). Always a
-/// proper rotation, also for inverted (det F < 0) or degenerate F.
+/// Rotation of the polar decomposition F = R S (the rotation maximising tr(RᵀF)), started
+/// from @p q (updated in place with the result: warm start). Newton steps on tr(RᵀF) near
+/// the solution (quadratic convergence: two or three iterations from a previous time step's
+/// rotation), the iterative method of Müller, Bender, Chentanez & Macklin, "A Robust Method
+/// to Extract the Rotational Part of Deformations" (MIG 2016) elsewhere. Always a proper
+/// rotation, also for inverted (det F < 0) or degenerate F.
 [[nodiscard]] Mat3 extract_rotation(const Mat3& F, Eigen::Quaterniond& q, int max_iterations = 50);
 
 /// Common part of the tetrahedral FEM models: linear tetrahedra, deformation gradient
@@ -58,6 +60,8 @@ class TetFemModel : public ForceModel {
   [[nodiscard]] std::vector<BlockIndex> stiffness_pattern() const override;
   void stiffness_blocks(const Particles& particles, std::span<Mat3> blocks,
                         bool threaded) const override;
+  void add_stiffness_to(const Particles& particles, std::span<const std::int32_t> slots,
+                        std::span<Mat3> values, bool threaded) const override;
   [[nodiscard]] std::optional<ElementFields> element_fields(const Particles&) const override;
 
   /// Deformation gradient of each element at the current positions.
@@ -98,6 +102,8 @@ class TetFemModel : public ForceModel {
  private:
   std::vector<std::int32_t> m_offsets;   // gather: per particle, element corner slots
   std::vector<std::int32_t> m_sources;
+  mutable std::vector<Mat3> m_block_scratch;   // threaded add_stiffness_to: element blocks
+  mutable std::vector<Vec3> m_force_scratch;   // add_forces: element corner forces
 };
 
 }  // namespace ido::sim

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 
+#include <limits>
 #include <vector>
 
 #include "ido/sim/fem_common.h"
@@ -28,7 +29,14 @@ class CorotationalFem final : public TetFemModel {
 
  private:
   [[nodiscard]] Mat3 rotation(std::size_t e, const Mat3& F) const;
+  /// Last rotation of an element and the F it was computed for (forces and stiffness at the
+  /// same positions reuse it instead of extracting it again).
+  struct CachedRotation {
+    Mat3 F = Mat3::Constant(std::numeric_limits<double>::quiet_NaN());
+    Mat3 R = Mat3::Identity();
+  };
   mutable std::vector<Eigen::Quaterniond> m_rotation;   // warm start per element
+  mutable std::vector<CachedRotation> m_cached;
 };
 
 }  // namespace ido::sim

@@ -57,6 +57,13 @@ class ForceModel {
   /// to @p blocks (same size and order as the pattern).
   virtual void stiffness_blocks(const Particles& particles, std::span<Mat3> blocks,
                                 bool threaded) const;
+  /// Adds this model's stiffness (N/mm) at the current positions into an assembled block
+  /// matrix: block k of stiffness_pattern() is added to @p values[@p slots[k]], or skipped
+  /// when slots[k] < 0 (e.g. a block on a fixed particle). The additions happen in pattern
+  /// order whether @p threaded or not, so the sums are deterministic. The default computes
+  /// stiffness_blocks() into a scratch buffer; models override it to skip the buffer.
+  virtual void add_stiffness_to(const Particles& particles, std::span<const std::int32_t> slots,
+                                std::span<Mat3> values, bool threaded) const;
   /// True when stiffness_pattern() is non-empty.
   [[nodiscard]] bool has_stiffness() const { return !stiffness_pattern().empty(); }
 

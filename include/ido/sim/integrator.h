@@ -47,9 +47,10 @@ void velocity_verlet(World& world, double dt_s);
 /// Classical fourth-order Runge–Kutta on (x, v).
 void rk4(World& world, double dt_s);
 /// Backward Euler linearised once per step (Baraff & Witkin 1998):
-/// (M + dt C + dt² K) Δv = dt (f − dt K v), solved with Jacobi-preconditioned conjugate
-/// gradients warm-started from the previous step's Δv (World::implicit_options()).
-/// Models without stiffness contribute their forces only.
+/// (M + dt C + dt² K) Δv = dt (f − dt K v), solved with preconditioned conjugate gradients
+/// (symmetric block Gauss–Seidel by default, or Jacobi) warm-started from the previous step's
+/// Δv (World::implicit_options()). K is assembled once per step into a block-sparse matrix
+/// whose pattern is built once. Models without stiffness contribute their forces only.
 void implicit_euler(World& world, double dt_s);
 }  // namespace integrators
 

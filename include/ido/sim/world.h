@@ -16,11 +16,23 @@
 
 namespace ido::sim {
 
+/// Preconditioner of the implicit Euler conjugate-gradient solve.
+enum class CgPreconditioner {
+  /// Inverse of the system matrix's diagonal (Jacobi).
+  Jacobi,
+  /// Symmetric block Gauss–Seidel: M = (D + L) D⁻¹ (D + Lᵀ) with D the 3×3 diagonal blocks
+  /// and L the strictly lower block triangle (Saad, "Iterative Methods for Sparse Linear
+  /// Systems", 2nd ed. 2003, §10.2). About a third of Jacobi's iterations on FEM beams, at
+  /// the price of one extra pass over the matrix per iteration; sequential (deterministic).
+  SymmetricGaussSeidel,
+};
+
 /// Settings of the implicit Euler scheme's conjugate-gradient solve.
 struct ImplicitEulerOptions {
   double cg_tolerance = 1e-6;     ///< stop when ‖r‖ ≤ tolerance · ‖b‖
   int cg_max_iterations = 500;    ///< cap on CG iterations per step
   bool warm_start = true;         ///< start CG from the previous step's Δv
+  CgPreconditioner preconditioner = CgPreconditioner::SymmetricGaussSeidel;
 };
 
 /// What the last step did.
