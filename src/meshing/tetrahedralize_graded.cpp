@@ -14,8 +14,9 @@
 //
 // Where this differs from the paper: instead of the paper's graded warping thresholds and
 // its computer-assisted bound [8.9°, 158.8°], the octree is refined until every lattice
-// tetrahedron that stuffing changes (one with a negative vertex and a vertex that is
-// positive, on the surface, or warped) is a BCC tetrahedron between two finest leaves.
+// tetrahedron that stuffing changes (one with a cut edge, along which a vertex may be
+// warped, or one with a negative vertex and a vertex that is positive, on the surface or
+// warped) is a BCC tetrahedron between two finest leaves.
 // Those are treated exactly as by one-level stuffing (same thresholds, same stencils, same
 // quadrilateral rules), so they inherit its bounds [10.7829°, 164.8266°]; every other kept
 // tetrahedron is an unchanged lattice tetrahedron within [30°, 135°]. The refinement is first
@@ -355,6 +356,7 @@ geometry::TetMesh tetrahedralize_graded(const image::Volume<float>& field_volume
         },
         threaded, 1024);
     check_cancel(progress);
+    const std::vector<std::int8_t> sign_before_warping = sign;
 
     // cut points on the lattice edges whose ends have opposite signs
     report(progress, 0.4, "tetrahedralize: cut points");
@@ -420,16 +422,21 @@ geometry::TetMesh tetrahedralize_graded(const image::Volume<float>& field_volume
     }
     check_cancel(progress);
 
-    // the check: every lattice tetrahedron stuffing changes must be a finest BCC one
+    // the check: every lattice tetrahedron stuffing changes must be a finest BCC one. That
+    // is every tetrahedron with a cut point on an edge (a vertex may have been warped along
+    // it, even when the tetrahedron itself is then dropped) and every one with a negative
+    // and a non-negative vertex after warping.
     std::vector<std::int32_t> refine;
     for (const LatticeTet& t : L.tets) {
       if (t.uniform) continue;
-      bool neg = false, other = false;
+      bool neg = false, other = false, neg0 = false, pos0 = false;
       for (Id x : t.v) {
         neg |= sign[std::size_t(x)] < 0;
         other |= sign[std::size_t(x)] >= 0;
+        neg0 |= sign_before_warping[std::size_t(x)] < 0;
+        pos0 |= sign_before_warping[std::size_t(x)] > 0;
       }
-      if (neg && other) {
+      if ((neg && other) || (neg0 && pos0)) {
         refine.push_back(t.leaf_a);
         refine.push_back(t.leaf_b);
       }

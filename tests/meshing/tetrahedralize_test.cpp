@@ -528,8 +528,9 @@ TEST(TetrahedralizeGraded, TorusBoundsGenusAndVolume) {
   EXPECT_LT(graded.tet_count(), tetrahedralize(field, {.edge_mm = h}).tet_count());
 }
 
-// Fields that are not distances (bumps with a small gradient, then white noise) defeat the
-// distance-based octree refinement; the exact check after warping must refine further. The
+// Fields that are not distances (bumps with a small and a large gradient, then white noise)
+// defeat the distance-based octree refinement; the exact check after warping must refine
+// further (without it the steep field gives 3.9° and a boundary off the zero level). The
 // stuffed tetrahedra are then the uniform lattice's, so the angles are held to what the
 // uniform lattice gives on such fields (see DihedralAnglesOnWhiteNoiseFields: the measured
 // extremes dip slightly past the paper's bounds there — on the first bumpy field below the
@@ -569,14 +570,22 @@ TEST(TetrahedralizeGraded, NonDistanceFieldsKeepTheBounds) {
   for (int trial = 0; trial < 2; ++trial) {
     const Vec3 c(u(rng), u(rng), u(rng));
     const double fr = 0.6 + 0.3 * u(rng);
-    // scaled by 0.3: |∇f| ≈ 0.3, so the field underestimates the distance to the surface
+    // scaled by 0.3 (the field underestimates the distance: more refinement than needed),
+    // then by 4 (overestimates it: the distance rule refines too little and only the check
+    // after warping brings the finest cubes to the surface)
+    const double scale = trial == 0 ? 0.3 : 4.0;
     const Field f = [=](const Vec3& p) {
       const Vec3 q = p - c;
-      return 0.3 * (q.norm() - 7.0 + 2.0 * std::sin(fr * q.x()) * std::cos(fr * 1.3 * q.y()));
+      return scale * (q.norm() - 7.0 + 2.0 * std::sin(fr * q.x()) * std::cos(fr * 1.3 * q.y()));
     };
     const auto field = sample_field(f, 41, 0.5);
     const auto mesh = tetrahedralize(field, {.edge_mm = 0.6 + 0.15 * trial, .graded = true});
     ASSERT_GT(mesh.tet_count(), 100u);
+    // near the surface the graded mesh is the uniform one: same boundary, same volume
+    const auto uniform = tetrahedralize(field, {.edge_mm = 0.6 + 0.15 * trial});
+    EXPECT_EQ(boundary(mesh).size(), boundary(uniform).size());
+    EXPECT_TRUE(test::rel_near(quality(mesh).total_volume, quality(uniform).total_volume, 1e-9));
+    EXPECT_LT(mesh.tet_count(), uniform.tet_count());
     expect_non_distance_bounds(mesh, field);
     EXPECT_TRUE(topology(boundary(mesh)).closed_oriented_manifold) << "trial " << trial;
   }
