@@ -1,7 +1,18 @@
 // SPDX-License-Identifier: Apache-2.0
-// `ido drill MESH --tool sphere:radius=MM[,shaft=MM] --path PATH.csv -o OUT.vtu ...`: runs a
-// scripted tool trajectory through the same three threads as an interactive session.
+// `ido drill MESH --tool sphere:radius=MM[,shaft=MM] --path PATH.csv -o OUT.vtu ...
+//  [--snapshots DIR [--snapshot-every SECONDS] [--snapshot-size WxH]]`: runs a scripted tool
+// trajectory through the same three threads as an interactive session; pictures of the
+// drilled surface come from the render consumer's copies of the v_lists, rendered after the
+// session (the drill library knows nothing of viz).
 #include <fmt/format.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <optional>
+#include <regex>
+#include <utility>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -17,6 +28,7 @@
 #include "ido/drill/tool.h"
 #include "ido/io/mesh_io.h"
 #include "ido/io/volume_io.h"
+#include "ido/viz/renderer.h"
 
 namespace ido::cli {
 namespace {
@@ -34,7 +46,40 @@ struct DrillOptions {
   double force_threshold_n = 0.2;
   double removal_rate = 0.0;
   double stiffness = 1.5;
+  std::int64_t visit_budget = -1;  // -1: the library default
+  std::string snapshots;
+  double snapshot_every_s = 0.5;
+  std::string snapshot_size = "640x480";
 };
+
+/// The most pictures one run may ask for.
+constexpr double kMaxSnapshots = 2000;
+
+/// "WxH" in pixels (1..4096 each). @throws ido::InvalidInput naming --snapshot-size.
+std::pair<int, int> parse_snapshot_size(const std::string& text) {
+  int w = 0, h = 0;
+  char x = 0, extra = 0;
+  if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || x != 'x' || w < 1 || h < 1 || w > 4096 || h > 4096) {
+    throw InvalidInput(fmt::format("--snapshot-size must be WIDTHxHEIGHT with 1..4096 pixels each, got '{}'", text));
+  }
+  return {w, h};
+}
+
+/// Creates @p dir (or checks it is a writable folder) and removes the snapshot_NNNN.png files
+/// of an earlier run. @throws ido::InvalidInput naming --snapshots.
+void prepare_snapshot_dir(const std::filesystem::path& dir) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (fs::exists(dir, ec) && !fs::is_directory(dir, ec)) {
+    throw InvalidInput(fmt::format("--snapshots {}: exists and is not a folder", dir.string()));
+  }
+  fs::create_directories(dir, ec);
+  if (ec) throw InvalidInput(fmt::format("--snapshots {}: cannot create the folder ({})", dir.string(), ec.message()));
+  static const std::regex kName("snapshot_[0-9]{4}\\.png");
+  for (const auto& e : fs::directory_iterator(dir, ec)) {
+    if (e.is_regular_file() && std::regex_match(e.path().filename().string(), kName)) fs::remove(e.path(), ec);
+  }
+}
 
 void run(const DrillOptions& o, const GlobalOptions& /*g*/) {
   if (!io::is_tet_mesh_path(o.output)) throw InvalidInput(fmt::format("{}: -o must be a .vtu (or .msh, .node) file", o.output));
@@ -52,22 +97,64 @@ void run(const DrillOptions& o, const GlobalOptions& /*g*/) {
   so.erosion.max_depth = o.max_depth;
   so.erosion.min_size_mm = o.min_size_mm;
   so.coupling.stiffness_n_per_mm = o.stiffness;
+  if (o.visit_budget >= 0) so.erosion.max_node_visits = static_cast<std::size_t>(o.visit_budget);
+  std::pair<int, int> picture{0, 0};
+  if (!o.snapshots.empty()) {
+    if (!(o.snapshot_every_s > 0.0) || !std::isfinite(o.snapshot_every_s)) {
+      throw InvalidInput(fmt::format("--snapshot-every must be a positive number of seconds, got {}", o.snapshot_every_s));
+    }
+    picture = parse_snapshot_size(o.snapshot_size);
+  }
   auto device = drill::ScriptedTrajectory::load_csv(o.path);
+  if (!o.snapshots.empty() && device.duration() / o.snapshot_every_s > kMaxSnapshots) {
+    throw InvalidInput(fmt::format("--snapshot-every {} s gives more than {} pictures over the {} s path", o.snapshot_every_s,
+                                   kMaxSnapshots, device.duration()));
+  }
   const auto mesh = io::read_tet_mesh(o.mesh);
   drill::TetHierarchy hierarchy(mesh);
   if (!o.density_from.empty()) drill::assign_density_from_ct(hierarchy, io::read_volume(o.density_from));
   const double before = hierarchy.material_volume();
+  if (!o.snapshots.empty()) prepare_snapshot_dir(o.snapshots);
 
   drill::Simulator sim(hierarchy, device, so);
+  // The render consumer hands over copies of its v_lists at the picture times; they are
+  // rendered once the session is over, so rendering never competes with the session.
+  std::vector<std::pair<double, std::vector<std::vector<drill::SurfaceFace>>>> shots;
+  if (!o.snapshots.empty()) {
+    sim.set_surface_snapshots([&shots](double t, const auto& lists) { shots.emplace_back(t, lists); }, o.snapshot_every_s,
+                              device.duration());
+  }
   sim.run(device.duration() + 60.0);
 
   io::write_tet_mesh(o.output, drill::full_leaf_mesh(hierarchy));
   const auto surface = drill::assemble_surface(sim.render_v_lists(), hierarchy.vertices());
   if (!o.surface.empty()) io::write_triangle_mesh(o.surface, surface);
+  nlohmann::json files = nlohmann::json::array();
+  if (!o.snapshots.empty()) {
+    // One camera for every picture, fitted to the intact mesh, looking down at 50°.
+    std::optional<viz::Camera> camera;
+    for (std::size_t k = 0; k < shots.size(); ++k) {
+      viz::Renderer ren(picture.first, picture.second);
+      ren.add_surface(drill::assemble_surface(shots[k].second, hierarchy.vertices()), Vec3(0.9, 0.85, 0.7),
+                      {.shading = viz::Shading::Flat});
+      if (!camera) camera = ren.fit_camera(30.0, 50.0);
+      ren.set_camera(*camera);
+      const auto path = std::filesystem::path(o.snapshots) / fmt::format("snapshot_{:04d}.png", k);
+      ren.write_png(path);
+      files.push_back(path.string());
+    }
+  }
   if (!o.report.empty()) {
     nlohmann::json r = drill_session_json(hierarchy, sim, so, before);
     r["mesh"] = o.mesh;
     r["surface_triangles"] = surface.triangles.size();
+    if (!o.snapshots.empty()) {
+      r["snapshots"] = files;
+      r["snapshot_period_s"] = o.snapshot_every_s;
+      nlohmann::json times = nlohmann::json::array();
+      for (const auto& s : shots) times.push_back(s.first);
+      r["snapshot_times_s"] = times;
+    }
     write_text_file(o.report, r.dump(2) + "\n");
   }
 }
@@ -88,6 +175,11 @@ void setup(CLI::App& app, const GlobalOptions& g) {
   sub->add_option("--force-threshold", opts->force_threshold_n, "Pressing force (N) above which the burr cuts (default 0.2)");
   sub->add_option("--removal-rate", opts->removal_rate, "Removal rate (mm^3/s at density 1); 0 = unlimited (default)");
   sub->add_option("--stiffness", opts->stiffness, "Coupling stiffness (N/mm, default 1.5)");
+  sub->add_option("--visit-budget", opts->visit_budget,
+                  "Erosion work per collision update (node visits; 0 = unlimited; default 6000), the rest carries over");
+  sub->add_option("--snapshots", opts->snapshots, "Folder for pictures of the drilled surface: snapshot_0000.png, ...");
+  sub->add_option("--snapshot-every", opts->snapshot_every_s, "Seconds of the path between pictures (default 0.5)");
+  sub->add_option("--snapshot-size", opts->snapshot_size, "Picture size WIDTHxHEIGHT in pixels (default 640x480)");
   sub->callback([opts, &g] { run(*opts, g); });
 }
 

@@ -49,37 +49,57 @@ double thread_cpu_s() {
 
 double leaf_edge(int depth) { return kBlockCell * std::sqrt(3.0) / std::ldexp(1.0, depth); }
 
+// One collision update as the simulator's collision thread does it: collide the 1000 burr
+// samples, queue the erosion sub-steps, run erosion within the visit budget (0 = unlimited),
+// rebuild the changed v_list chunks. After the trace, updates continue (no new pose) until
+// the erosion and v_list backlogs are done; they are timed too. Args: depth, erosion visit
+// budget, chunk level, v_list visit budget (0 = unlimited).
 void BM_UpdateTime(benchmark::State& state) {
   const int depth = static_cast<int>(state.range(0));
+  const auto budget = static_cast<std::size_t>(state.range(1));
+  const int chunk_level = static_cast<int>(state.range(2));
+  const auto surface_budget = static_cast<std::size_t>(state.range(3));
   std::vector<double> times;
   std::vector<double> cpu_times;
-  double bytes = 0.0, nodes = 0.0, storage = 0.0;
+  double bytes = 0.0, nodes = 0.0, storage = 0.0, removed = 0.0, faces = 0.0;
+  std::size_t backlog_updates = 0, max_queue = 0;
   for (auto _ : state) {
     TetHierarchy h(make_block(kBlock, kBlockCell));
-    BoundarySurface surface(h);
+    const double before = h.material_volume();
+    BoundarySurface surface(h, {.chunk_level = chunk_level});
     const Tool tool({.burr_radius_mm = kRadius, .sample_count = 1000});
-    Eroder eroder({.force_threshold_n = 0.0, .removal_rate_mm3_per_s = 0.0, .max_depth = depth});
+    Eroder eroder({.force_threshold_n = 0.0, .removal_rate_mm3_per_s = 0.0, .max_depth = depth, .max_node_visits = budget});
     times.clear();
     cpu_times.clear();
+    backlog_updates = 0;
+    max_queue = 0;
     Vec3 last = trace(0);
-    for (int i = 0; i < kUpdates; ++i) {
+    for (int i = 0; i < kUpdates || eroder.has_pending() || surface.has_pending(); ++i) {
       const auto t0 = std::chrono::steady_clock::now();
       const double c0 = thread_cpu_s();
-      ToolPose pose;
-      pose.position_mm = trace(i);
-      const ContactModel m = collide(h, tool, pose);
-      benchmark::DoNotOptimize(m);
-      const int n = std::max(1, static_cast<int>(std::ceil((pose.position_mm - last).norm() / (0.25 * kRadius))));
-      for (int k = 1; k <= n; ++k) eroder.erode(h, last + (pose.position_mm - last) * (double(k) / n), kRadius, 1.0, 1e-3 / n);
-      surface.update(h, eroder.changed_roots(), eroder.changed_root_faces());
+      if (i < kUpdates) {
+        ToolPose pose;
+        pose.position_mm = trace(i);
+        const ContactModel m = collide(h, tool, pose);
+        benchmark::DoNotOptimize(m);
+        const int n = std::max(1, static_cast<int>(std::ceil((pose.position_mm - last).norm() / (0.25 * kRadius))));
+        for (int k = 1; k <= n; ++k) eroder.enqueue(last + (pose.position_mm - last) * (double(k) / n), kRadius, 1.0, 1e-3 / n);
+        last = pose.position_mm;
+      } else {
+        ++backlog_updates;
+      }
+      max_queue = std::max(max_queue, eroder.queued());
+      (void)eroder.run(h, budget);
+      surface.update(h, eroder.changed_nodes(), surface_budget);
       eroder.clear_changed_roots();
-      last = pose.position_mm;
       times.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
       cpu_times.push_back(thread_cpu_s() - c0);
     }
     bytes = h.bytes_per_node();
     storage = static_cast<double>(h.node_storage_bytes());
     nodes = static_cast<double>(h.node_count());
+    removed = before - h.material_volume();
+    faces = static_cast<double>(surface.face_count());
   }
   const auto p = percentiles(times);
   state.counters["p50_ms"] = p.p50 * 1e3;
@@ -88,12 +108,30 @@ void BM_UpdateTime(benchmark::State& state) {
   const auto pc = percentiles(cpu_times);
   state.counters["cpu_p50_ms"] = pc.p50 * 1e3;
   state.counters["cpu_p99_ms"] = pc.p99 * 1e3;
+  state.counters["cpu_max_ms"] = pc.max * 1e3;
+  state.counters["updates"] = static_cast<double>(times.size());
+  state.counters["backlog_updates"] = static_cast<double>(backlog_updates);
+  state.counters["max_queued"] = static_cast<double>(max_queue);
+  state.counters["removed_mm3"] = removed;
+  state.counters["faces"] = faces;
   state.counters["bytes_per_node"] = bytes;
   state.counters["node_storage_kB"] = storage / 1024.0;
   state.counters["nodes"] = nodes;
   state.counters["leaf_edge_mm"] = leaf_edge(depth);
 }
-BENCHMARK(BM_UpdateTime)->DenseRange(4, 8)->Iterations(1)->Unit(benchmark::kMillisecond);
+// Unlimited erosion with whole-root v_lists (chunk level 0: the previous algorithm's work,
+// in the new code), unlimited erosion with chunked v_lists, and the default budget.
+BENCHMARK(BM_UpdateTime)
+    ->Args({4, 0, 0, 0})
+    ->Args({5, 0, 0, 0})
+    ->Args({6, 0, 0, 0})
+    ->Args({4, 0, 3, 0})
+    ->Args({5, 0, 3, 0})
+    ->Args({6, 0, 3, 0})
+    ->ArgsProduct({{4, 5, 6, 7, 8}, {6000}, {3}, {8000}})
+    ->ArgsProduct({{5, 6}, {3000}, {3}, {4000}})
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond);
 
 // The haptic loop over a scripted trace through the three threads.
 void BM_HapticLoop(benchmark::State& state) {
@@ -131,9 +169,12 @@ void BM_HapticLoop(benchmark::State& state) {
   state.counters["force_max_ms"] = force.max * 1e3;
   state.counters["update_p50_ms"] = update.p50 * 1e3;
   state.counters["update_p99_ms"] = update.p99 * 1e3;
+  state.counters["update_max_ms"] = update.max * 1e3;
   state.counters["removed_mm3"] = st.removed_volume_mm3;
+  state.counters["backlog_max"] = static_cast<double>(st.erosion_backlog_max);
+  state.counters["collision_updates"] = static_cast<double>(st.collision_updates);
 }
-BENCHMARK(BM_HapticLoop)->Arg(10)->Iterations(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_HapticLoop)->Arg(10)->Arg(60)->Iterations(1)->Unit(benchmark::kMillisecond);
 
 #ifdef IDO_BENCH_OPENVDB
 // Voxel removal in OpenVDB on the same trace: voxels of edge = leaf edge at `depth`; per

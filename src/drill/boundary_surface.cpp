@@ -3,9 +3,12 @@
 #include "ido/drill/boundary_surface.h"
 
 #include <algorithm>
+#include <string>
 #include <tuple>
 #include <unordered_map>
 #include <unordered_set>
+
+#include "ido/core/error.h"
 
 namespace ido::drill {
 namespace {
@@ -82,9 +85,6 @@ struct Across {
   std::uint32_t word = TetHierarchy::kErased;  ///< storage word of `node` (boundary: erased)
 };
 
-}  // namespace
-struct AcrossCache;
-namespace {
 
 // Child c of a node with vertex-pair codes `codes` (3 pairs in the node's local indices, on
 // the node's face g): finds the child slot, its face on g, and its local index per code.
@@ -153,11 +153,31 @@ bool find_child_face(int g, const std::array<int, 3>& codes, int& child, int& ch
 
 }  // namespace
 
-// Scratch of the v_list rebuild (kept so the header's layout stays; the top-down walk
-// below needs no memo: each node's face neighbours are derived from its parent's).
-struct AcrossCache {};
-
 namespace {
+
+// For each (slot, face) with a sibling across, the sibling's local index of each of our
+// vertices (−1 for the vertex opposite the face); tabulated once.
+const std::array<std::array<std::array<int, 4>, 4>, 8>& sibling_map() {
+  static const auto kMap = [] {
+    std::array<std::array<std::array<int, 4>, 4>, 8> m{};
+    const TreeTable& tt = TreeTable::get();
+    for (std::size_t c = 0; c < 8; ++c)
+      for (std::size_t g = 0; g < 4; ++g) {
+        m[c][g] = {-1, -1, -1, -1};
+        const int sib = tt.face_link[c][g].sibling;
+        if (sib < 0) continue;
+        const auto s2 = static_cast<std::size_t>(sib);
+        for (std::size_t k = 0; k < 4; ++k) {
+          if (k == g) continue;
+          const int code = pair_code(tt.vertex[c][k][0], tt.vertex[c][k][1]);
+          for (std::size_t k2 = 0; k2 < 4; ++k2)
+            if (pair_code(tt.vertex[s2][k2][0], tt.vertex[s2][k2][1]) == code) m[c][g][k] = static_cast<int>(k2);
+        }
+      }
+    return m;
+  }();
+  return kMap;
+}
 
 // What lies across face f of root n.
 Across root_across(const TetHierarchy& h, std::uint32_t r, int f) {
@@ -181,27 +201,7 @@ Across child_across(const TetHierarchy& h, const NodeRef& p, std::uint32_t pword
   const auto su = static_cast<std::size_t>(s);
   const auto link = t.face_link[su][static_cast<std::size_t>(f)];
   if (link.sibling >= 0) {
-    // Tabulated once: for each (slot, face) with a sibling across, the sibling's local index
-    // of each of our vertices (−1 for the vertex opposite the face).
-    static const auto kSiblingMap = [] {
-      std::array<std::array<std::array<int, 4>, 4>, 8> m{};
-      const TreeTable& tt = TreeTable::get();
-      for (std::size_t c = 0; c < 8; ++c)
-        for (std::size_t g = 0; g < 4; ++g) {
-          m[c][g] = {-1, -1, -1, -1};
-          const int sib = tt.face_link[c][g].sibling;
-          if (sib < 0) continue;
-          const auto s2 = static_cast<std::size_t>(sib);
-          for (std::size_t k = 0; k < 4; ++k) {
-            if (k == g) continue;
-            const int code = pair_code(tt.vertex[c][k][0], tt.vertex[c][k][1]);
-            for (std::size_t k2 = 0; k2 < 4; ++k2)
-              if (pair_code(tt.vertex[s2][k2][0], tt.vertex[s2][k2][1]) == code) m[c][g][k] = static_cast<int>(k2);
-          }
-        }
-      return m;
-    }();
-    return Across{false, p.child(link.sibling), link.sibling_face, kSiblingMap[su][static_cast<std::size_t>(f)],
+    return Across{false, p.child(link.sibling), link.sibling_face, sibling_map()[su][static_cast<std::size_t>(f)],
                   h.child_word(pword, link.sibling)};
   }
   const auto pf = static_cast<std::size_t>(link.parent_face);
@@ -223,6 +223,33 @@ Across child_across(const TetHierarchy& h, const NodeRef& p, std::uint32_t pword
   Across a{false, pa.node.child(c), cg, {-1, -1, -1, -1}};
   for (std::size_t j = 0; j < 3; ++j) a.vmap[ks[j]] = local[j];
   a.word = h.child_word(pa.word, c);
+  return a;
+}
+
+// What lies across face f of child slot s of node p when every node is taken as refined:
+// the node at the same depth sharing the face (the "virtual" neighbour; it exists in the
+// tree or lies below a coarser leaf), given the same for p's faces.
+Across virtual_child_across(const NodeRef& p, int s, int f, const std::array<Across, 4>& pacr) {
+  const TreeTable& t = TreeTable::get();
+  const auto su = static_cast<std::size_t>(s);
+  const auto link = t.face_link[su][static_cast<std::size_t>(f)];
+  if (link.sibling >= 0)
+    return Across{false, p.child(link.sibling), link.sibling_face, sibling_map()[su][static_cast<std::size_t>(f)]};
+  const Across& pa = pacr[static_cast<std::size_t>(link.parent_face)];
+  if (pa.boundary) return pa;
+  std::array<int, 3> codes{};
+  std::array<std::size_t, 3> ks{};
+  int i = 0;
+  for (std::size_t k = 0; k < 4; ++k) {
+    if (static_cast<int>(k) == f) continue;
+    codes[static_cast<std::size_t>(i)] = pair_code(pa.vmap[t.vertex[su][k][0]], pa.vmap[t.vertex[su][k][1]]);
+    ks[static_cast<std::size_t>(i++)] = k;
+  }
+  int c = -1, cg = -1;
+  std::array<int, 3> local{};
+  if (!find_child_face(pa.face, codes, c, cg, local)) return {true, {}, -1, {}};
+  Across a{false, pa.node.child(c), cg, {-1, -1, -1, -1}};
+  for (std::size_t j = 0; j < 3; ++j) a.vmap[ks[j]] = local[j];
   return a;
 }
 
@@ -285,58 +312,6 @@ Vec3 point_position(const PointKey& key, std::span<const Vec3> vertices_mm) noex
   return p / static_cast<double>(kBaryScale);
 }
 
-BoundarySurface::BoundarySurface(const TetHierarchy& hierarchy) : m_cache(std::make_unique<AcrossCache>()) {
-  rebuild_all(hierarchy);
-}
-BoundarySurface::~BoundarySurface() = default;
-BoundarySurface::BoundarySurface(BoundarySurface&&) noexcept = default;
-BoundarySurface& BoundarySurface::operator=(BoundarySurface&&) noexcept = default;
-
-std::size_t BoundarySurface::face_count() const noexcept {
-  std::size_t n = 0;
-  for (const auto& f : m_faces) n += f.size();
-  return n;
-}
-
-void BoundarySurface::rebuild_all(const TetHierarchy& hierarchy) {
-  m_faces.assign(hierarchy.root_count(), {});
-  m_mark.assign(hierarchy.root_count(), 0);
-  m_rebuilt.clear();
-  for (std::size_t r = 0; r < hierarchy.root_count(); ++r) {
-    rebuild_root(hierarchy, r);
-    m_rebuilt.push_back(static_cast<std::uint32_t>(r));
-  }
-}
-
-void BoundarySurface::update(const TetHierarchy& hierarchy, std::span<const std::uint32_t> changed_roots) {
-  const std::vector<std::uint8_t> all(changed_roots.size(), 0xF);
-  update(hierarchy, changed_roots, all);
-}
-
-void BoundarySurface::update(const TetHierarchy& hierarchy, std::span<const std::uint32_t> changed_roots,
-                             std::span<const std::uint8_t> changed_faces) {
-  m_rebuilt.clear();
-  auto add = [&](std::uint32_t r) {
-    if (!m_mark[r]) {
-      m_mark[r] = 1;
-      m_rebuilt.push_back(r);
-    }
-  };
-  for (std::size_t i = 0; i < changed_roots.size(); ++i) {
-    const std::uint32_t r = changed_roots[i];
-    add(r);
-    for (int f = 0; f < 4; ++f) {
-      if (i < changed_faces.size() && ((changed_faces[i] >> f) & 1U) == 0) continue;
-      const auto nb = hierarchy.root_neighbor(r, f);
-      if (nb.root >= 0) add(static_cast<std::uint32_t>(nb.root));
-    }
-  }
-  for (const std::uint32_t r : m_rebuilt) {
-    rebuild_root(hierarchy, r);
-    m_mark[r] = 0;
-  }
-}
-
 namespace {
 
 // Emits the visible faces of the full leaves of the subtree of n (storage word `word`,
@@ -344,14 +319,15 @@ namespace {
 // from its parent's in O(1).
 // NOLINTNEXTLINE(misc-no-recursion): depth ≤ kMaxDepth
 void visit(const TetHierarchy& h, std::size_t r, const NodeRef& n, std::uint32_t word, const std::array<Across, 4>& acr,
-           std::vector<SurfaceFace>& out) {
+           std::vector<SurfaceFace>& out, std::size_t& visits) {
+  ++visits;
   const NodeState st = TetHierarchy::state_of_word(word);
   if (st == NodeState::Erased) return;
   if (st == NodeState::Internal) {
     for (int c = 0; c < 8; ++c) {
       std::array<Across, 4> cacr;
       for (int f = 0; f < 4; ++f) cacr[static_cast<std::size_t>(f)] = child_across(h, n, word, c, f, acr);
-      visit(h, r, n.child(c), h.child_word(word, c), cacr, out);
+      visit(h, r, n.child(c), h.child_word(word, c), cacr, out, visits);
     }
     return;
   }
@@ -384,13 +360,271 @@ void visit(const TetHierarchy& h, std::size_t r, const NodeRef& n, std::uint32_t
 
 }  // namespace
 
-void BoundarySurface::rebuild_root(const TetHierarchy& hierarchy, std::size_t r) {
-  auto& out = m_faces[r];
-  out.clear();
-  const auto ru = static_cast<std::uint32_t>(r);
+namespace {
+
+// Chunk indices [lo, hi) at chunk level L covered by node n: the first min(depth, L) slots of
+// its path, most significant first (depth-first order).
+std::pair<std::uint32_t, std::uint32_t> chunk_range(const NodeRef& n, int level) {
+  std::uint32_t idx = 0;
+  const int d = std::min<int>(n.depth, level);
+  for (int l = 1; l <= d; ++l) idx = idx * 8U + static_cast<std::uint32_t>(n.slot(l));
+  const std::uint32_t span = 1U << (3 * (level - d));
+  return {idx * span, idx * span + span};
+}
+
+std::array<Across, 4> root_acr(const TetHierarchy& h, std::uint32_t r) {
   std::array<Across, 4> acr;
-  for (int f = 0; f < 4; ++f) acr[static_cast<std::size_t>(f)] = root_across(hierarchy, ru, f);
-  visit(hierarchy, r, NodeRef{ru, 0, 0}, hierarchy.root_word(r), acr, out);
+  for (int f = 0; f < 4; ++f) acr[static_cast<std::size_t>(f)] = root_across(h, r, f);
+  return acr;
+}
+
+}  // namespace
+
+BoundarySurface::BoundarySurface(const TetHierarchy& hierarchy, const BoundarySurfaceOptions& options)
+    : m_options(options) {
+  if (options.chunk_level < 0 || options.chunk_level > 4) {
+    throw InvalidInput("boundary surface: chunk level must be between 0 and 4, got " + std::to_string(options.chunk_level));
+  }
+  m_full_chunks = 1U << (3 * options.chunk_level);
+  rebuild_all(hierarchy);
+}
+BoundarySurface::~BoundarySurface() = default;
+BoundarySurface::BoundarySurface(BoundarySurface&&) noexcept = default;
+BoundarySurface& BoundarySurface::operator=(BoundarySurface&&) noexcept = default;
+
+std::size_t BoundarySurface::face_count() const noexcept {
+  std::size_t n = 0;
+  for (const auto& root : m_chunks)
+    for (const auto& c : root) n += c.size();
+  return n;
+}
+
+const std::vector<SurfaceFace>& BoundarySurface::v_list(std::size_t r) const {
+  if (m_flat_stale[r]) {
+    auto& flat = m_flat[r];
+    flat.clear();
+    for (const auto& c : m_chunks[r]) flat.insert(flat.end(), c.begin(), c.end());
+    m_flat_stale[r] = 0;
+  }
+  return m_flat[r];
+}
+
+const std::vector<std::vector<SurfaceFace>>& BoundarySurface::v_lists() const {
+  for (const std::uint32_t r : m_stale_roots) (void)v_list(r);
+  m_stale_roots.clear();
+  return m_flat;
+}
+
+void BoundarySurface::rebuild_all(const TetHierarchy& hierarchy) {
+  const std::size_t n = hierarchy.root_count();
+  m_chunks.assign(n, std::vector<std::vector<SurfaceFace>>(1));
+  m_flat.assign(n, {});
+  m_flat_stale.assign(n, 0);
+  m_stale_roots.clear();
+  m_mark.assign(n, 0);
+  m_rebuilt.clear();
+  m_rebuilt_chunks.clear();
+  m_dirty.clear();
+  for (std::size_t r = 0; r < n; ++r) mark_root(static_cast<std::uint32_t>(r));
+  rebuild_ranges(hierarchy);
+}
+
+void BoundarySurface::mark_root(std::uint32_t r) { m_dirty.push_back({r, 0, m_full_chunks}); }
+
+// Marks the chunks of `node` and, for each of its faces on the boundary of its ancestor y at
+// the chunk level (or of the node itself when shallower), records (y, face) in m_faces_out
+// for mark_faces().
+void BoundarySurface::mark_node(const TetHierarchy& /*h*/, const NodeRef& node) {
+  const int level = m_options.chunk_level;
+  const auto [lo, hi] = chunk_range(node, level);
+  m_dirty.push_back({node.root, lo, hi});
+  const TreeTable& t = TreeTable::get();
+  NodeRef y = node;
+  std::uint8_t mask = 0;
+  for (int f = 0; f < 4; ++f) {
+    NodeRef a = node;
+    int g = f;
+    bool interior = false;
+    while (a.depth > level) {
+      const auto link = t.face_link[static_cast<std::size_t>(a.slot(a.depth))][static_cast<std::size_t>(g)];
+      if (link.sibling >= 0) {
+        interior = true;
+        break;
+      }
+      g = link.parent_face;
+      a = a.parent();
+    }
+    if (interior) continue;
+    y = a;
+    mask = static_cast<std::uint8_t>(mask | (1U << g));
+  }
+  if (mask != 0) m_face_marks.push_back({y, mask});
+}
+
+// Marks the chunks across the recorded faces: one top-down walk per distinct node.
+void BoundarySurface::mark_faces(const TetHierarchy& h) {
+  std::sort(m_face_marks.begin(), m_face_marks.end(), [](const FaceMark& a, const FaceMark& b) {
+    return std::tie(a.node.root, a.node.depth, a.node.path) < std::tie(b.node.root, b.node.depth, b.node.path);
+  });
+  const int level = m_options.chunk_level;
+  std::size_t i = 0;
+  while (i < m_face_marks.size()) {
+    const NodeRef y = m_face_marks[i].node;
+    std::uint8_t mask = 0;
+    for (; i < m_face_marks.size() && m_face_marks[i].node == y; ++i) mask = static_cast<std::uint8_t>(mask | m_face_marks[i].faces);
+    // Virtual neighbours of y's faces, top-down from the root.
+    std::array<Across, 4> acr = root_acr(h, y.root);
+    NodeRef p{y.root, 0, 0};
+    for (int l = 1; l <= y.depth; ++l) {
+      const int s = y.slot(l);
+      std::array<Across, 4> cacr;
+      for (int k = 0; k < 4; ++k) cacr[static_cast<std::size_t>(k)] = virtual_child_across(p, s, k, acr);
+      acr = cacr;
+      p = p.child(s);
+    }
+    for (int g = 0; g < 4; ++g) {
+      if (((mask >> g) & 1U) == 0) continue;
+      const Across& a = acr[static_cast<std::size_t>(g)];
+      if (a.boundary) continue;
+      const auto [nlo, nhi] = chunk_range(a.node, level);
+      m_dirty.push_back({a.node.root, nlo, nhi});
+    }
+  }
+  m_face_marks.clear();
+}
+
+void BoundarySurface::update(const TetHierarchy& hierarchy, std::span<const std::uint32_t> changed_roots) {
+  const std::vector<std::uint8_t> all(changed_roots.size(), 0xF);
+  update(hierarchy, changed_roots, all);
+}
+
+void BoundarySurface::update(const TetHierarchy& hierarchy, std::span<const std::uint32_t> changed_roots,
+                             std::span<const std::uint8_t> changed_faces) {
+  m_dirty.clear();
+  for (std::size_t i = 0; i < changed_roots.size(); ++i) {
+    const std::uint32_t r = changed_roots[i];
+    mark_root(r);
+    for (int f = 0; f < 4; ++f) {
+      if (i < changed_faces.size() && ((changed_faces[i] >> f) & 1U) == 0) continue;
+      const auto nb = hierarchy.root_neighbor(r, f);
+      if (nb.root >= 0) mark_root(static_cast<std::uint32_t>(nb.root));
+    }
+  }
+  rebuild_ranges(hierarchy);
+}
+
+void BoundarySurface::update(const TetHierarchy& hierarchy, std::span<const NodeRef> changed_nodes) {
+  update(hierarchy, changed_nodes, 0);
+}
+
+void BoundarySurface::update(const TetHierarchy& hierarchy, std::span<const NodeRef> changed_nodes,
+                             std::size_t max_node_visits) {
+  m_face_marks.clear();
+  for (const NodeRef& n : changed_nodes) mark_node(hierarchy, n);
+  mark_faces(hierarchy);
+  rebuild_ranges(hierarchy, max_node_visits);
+}
+
+void BoundarySurface::rebuild_ranges(const TetHierarchy& hierarchy, std::size_t max_node_visits) {
+  m_rebuilt.clear();
+  m_rebuilt_chunks.clear();
+  m_visits = 0;
+  std::sort(m_dirty.begin(), m_dirty.end(),
+            [](const Range& a, const Range& b) { return a.root != b.root ? a.root < b.root : a.lo < b.lo; });
+  // Merge overlapping ranges of a root.
+  std::vector<Range> merged;
+  merged.reserve(m_dirty.size());
+  for (const Range& d : m_dirty) {
+    if (!merged.empty() && merged.back().root == d.root && d.lo <= merged.back().hi) {
+      merged.back().hi = std::max(merged.back().hi, d.hi);
+    } else {
+      merged.push_back(d);
+    }
+  }
+  m_dirty.clear();
+  for (std::size_t i = 0; i < merged.size(); ++i) {
+    Range& d = merged[i];
+    if (max_node_visits > 0 && m_visits >= max_node_visits) {
+      m_dirty.assign(merged.begin() + static_cast<std::ptrdiff_t>(i), merged.end());  // the rest waits
+      break;
+    }
+    m_range_end = 0;
+    const std::uint32_t stop = rebuild_range(hierarchy, d.root, d.lo, d.hi, max_node_visits);
+    if (!m_mark[d.root]) {
+      m_mark[d.root] = 1;
+      m_rebuilt.push_back(d.root);
+    }
+    if (stop < d.hi || (stop < m_range_end && m_range_end > 0)) {
+      d.lo = stop;
+      d.hi = std::max(d.hi, m_range_end);
+      m_dirty.assign(merged.begin() + static_cast<std::ptrdiff_t>(i), merged.end());
+      break;
+    }
+  }
+  for (const std::uint32_t r : m_rebuilt) {
+    m_mark[r] = 0;
+    if (!m_flat_stale[r]) {
+      m_flat_stale[r] = 1;
+      m_stale_roots.push_back(r);
+    }
+  }
+  std::sort(m_rebuilt_chunks.begin(), m_rebuilt_chunks.end());
+  m_rebuilt_chunks.erase(std::unique(m_rebuilt_chunks.begin(), m_rebuilt_chunks.end()), m_rebuilt_chunks.end());
+}
+
+// Rebuilds the units (the node on each chunk's path at the chunk level, or the shallower
+// leaf covering it) meeting chunks [lo, hi) of root r; stops early (returning the first chunk
+// not rebuilt) once max_node_visits (> 0) nodes were walked. Returns hi when done.
+std::uint32_t BoundarySurface::rebuild_range(const TetHierarchy& h, std::uint32_t r, std::uint32_t lo, std::uint32_t hi,
+                                             std::size_t max_node_visits) {
+  auto& ch = m_chunks[r];
+  const std::uint32_t root_word = h.root_word(r);
+  if (ch.size() == 1 && m_full_chunks > 1 && TetHierarchy::state_of_word(root_word) == NodeState::Internal) {
+    ch.resize(m_full_chunks);  // first refinement: every chunk is rebuilt
+    lo = 0;
+    hi = m_full_chunks;
+  }
+  const int level = ch.size() == 1 ? 0 : m_options.chunk_level;
+  const std::uint32_t requested_hi = hi;
+  if (level == 0) {
+    lo = 0;
+    hi = 1;
+  }
+  hi = std::min<std::uint32_t>(hi, static_cast<std::uint32_t>(ch.size()));
+  const std::array<Across, 4> racr = root_acr(h, r);
+  std::uint32_t c = lo;
+  while (c < hi) {
+    NodeRef node{r, 0, 0};
+    std::uint32_t word = root_word;
+    std::array<Across, 4> acr = racr;
+    int d = 0;
+    while (d < level && TetHierarchy::state_of_word(word) == NodeState::Internal) {
+      const int s = static_cast<int>((c >> (3 * (level - d - 1))) & 7U);
+      std::array<Across, 4> cacr;
+      for (int f = 0; f < 4; ++f) cacr[static_cast<std::size_t>(f)] = child_across(h, node, word, s, f, acr);
+      node = node.child(s);
+      word = h.child_word(word, s);
+      acr = cacr;
+      ++d;
+    }
+    const std::uint32_t span = 1U << (3 * (level - d));
+    const std::uint32_t ulo = c & ~(span - 1U);
+    auto& out = ch[ulo];
+    out.clear();
+    visit(h, r, node, word, acr, out, m_visits);
+    m_rebuilt_chunks.push_back({r, ulo});
+    for (std::uint32_t k = ulo + 1; k < ulo + span; ++k) {
+      if (ch[k].empty()) continue;
+      ch[k].clear();
+      m_rebuilt_chunks.push_back({r, k});
+    }
+    c = ulo + span;
+    if (max_node_visits > 0 && m_visits >= max_node_visits && c < hi) {
+      m_range_end = hi;
+      return c;
+    }
+  }
+  return std::max(requested_hi, hi);
 }
 
 geometry::TriangleMesh assemble_surface(std::span<const std::vector<SurfaceFace>> v_lists,

@@ -36,9 +36,11 @@ bool sphere_misses_tet(const std::array<Vec3, 4>& x, const Vec3& c, double r) {
 
 // True when erosion would remove anything from a full node of geometry x at depth `depth`
 // (finest level `finest`) without touching the tree: the same decisions as
-// Eroder::process on a full leaf, evaluated on derived geometry only, so a partly covered
-// leaf is refined only when a descendant will actually go (no refine-then-undo).
-bool would_remove(const std::array<Vec3, 4>& x, int depth, int finest, const Vec3& c, double r) {
+// Eroder::enter on a full leaf, evaluated on derived geometry only, so a partly covered
+// leaf is refined only when a descendant will actually go (no refine-then-undo). Adds the
+// nodes it tests to `visits`.
+bool would_remove(const std::array<Vec3, 4>& x, int depth, int finest, const Vec3& c, double r, std::size_t& visits) {
+  ++visits;
   if (sphere_misses_tet(x, c, r)) return false;
   const double r2 = r * r;
   bool all_inside = true;
@@ -49,7 +51,7 @@ bool would_remove(const std::array<Vec3, 4>& x, int depth, int finest, const Vec
   for (std::size_t s = 0; s < 8; ++s) {
     std::array<Vec3, 4> ch;
     for (std::size_t k = 0; k < 4; ++k) ch[k] = 0.5 * (x[t.vertex[s][k][0]] + x[t.vertex[s][k][1]]);
-    if (would_remove(ch, depth + 1, finest, c, r)) return true;
+    if (would_remove(ch, depth + 1, finest, c, r, visits)) return true;
   }
   return false;
 }
@@ -75,6 +77,7 @@ void Eroder::clear_changed_roots() noexcept {
   for (auto r : m_changed) m_is_changed[r] = 0;
   m_changed.clear();
   m_changed_faces.clear();
+  m_changed_nodes.clear();
 }
 
 bool Eroder::pay(double cost) noexcept {
@@ -84,12 +87,27 @@ bool Eroder::pay(double cost) noexcept {
   return true;
 }
 
-// Returns false when the budget ran out (stop everything).
-bool Eroder::process(TetHierarchy& h, const NodeRef& node, const std::array<Vec3, 4>& x, int finest,
-                     const std::array<std::int8_t, 4>& root_face, ErosionStats& stats) {
+void Eroder::mark(const NodeRef& node, std::uint8_t faces) {
+  if (!m_is_changed[node.root]) {
+    m_is_changed[node.root] = 1;
+    m_slot[node.root] = static_cast<std::uint32_t>(m_changed.size());
+    m_changed.push_back(node.root);
+    m_changed_faces.push_back(0);
+  }
+  auto& m = m_changed_faces[m_slot[node.root]];
+  m = static_cast<std::uint8_t>(m | faces);
+  m_changed_nodes.push_back(node);
+}
+
+// Steps 1–5 of processing a node for the current sphere: returns Done when the node needs
+// nothing more (missed, erased, removed, or left whole), Pushed when it is partly covered and
+// its children are to be processed (a frame was pushed), Abort when the volume budget ran out.
+Eroder::Enter Eroder::enter(TetHierarchy& h, const NodeRef& node, const std::array<Vec3, 4>& x, int finest,
+                            const std::array<std::int8_t, 4>& root_face, ErosionStats& stats) {
+  ++m_visits;
   const NodeState st = h.state(node);
-  if (st == NodeState::Erased) return true;
-  if (sphere_misses_tet(x, m_centre, m_radius)) return true;
+  if (st == NodeState::Erased) return Enter::Done;
+  if (sphere_misses_tet(x, m_centre, m_radius)) return Enter::Done;
   const double r2 = m_radius * m_radius;
   bool all_inside = true;
   for (const auto& v : x) all_inside = all_inside && (v - m_centre).squaredNorm() <= r2;
@@ -97,20 +115,10 @@ bool Eroder::process(TetHierarchy& h, const NodeRef& node, const std::array<Vec3
   for (const auto f : root_face)
     if (f >= 0) face_mask = static_cast<std::uint8_t>(face_mask | (1U << f));
   m_face_mask[node.depth] = face_mask;
-  auto mark = [&](std::uint8_t faces) {
-    if (!m_is_changed[node.root]) {
-      m_is_changed[node.root] = 1;
-      m_slot[node.root] = static_cast<std::uint32_t>(m_changed.size());
-      m_changed.push_back(node.root);
-      m_changed_faces.push_back(0);
-    }
-    auto& m = m_changed_faces[m_slot[node.root]];
-    m = static_cast<std::uint8_t>(m | faces);
-  };
   if (all_inside || node.depth >= finest) {
     if (!all_inside) {
       const Vec3 centroid = 0.25 * (x[0] + x[1] + x[2] + x[3]);
-      if ((centroid - m_centre).squaredNorm() > r2) return true;
+      if ((centroid - m_centre).squaredNorm() > r2) return Enter::Done;
     }
     double material = 0.0;
     if (st == NodeState::Full) {
@@ -130,76 +138,54 @@ bool Eroder::process(TetHierarchy& h, const NodeRef& node, const std::array<Vec3
     }
     if (!pay(material * h.density(node.root))) {
       stats.rate_limited = true;
-      return false;
+      return Enter::Abort;
     }
     h.erase(node);
     stats.removed_volume_mm3 += material;
     ++stats.nodes_removed;
     // Ancestors merged into erased leaves change what lies across their faces too.
     std::uint8_t faces = face_mask;
-    for (NodeRef a = node; a.depth > 0 && h.state(a.parent()) == NodeState::Erased; a = a.parent())
-      faces = static_cast<std::uint8_t>(faces | m_face_mask[a.depth - 1]);
-    mark(faces);
-    return true;
+    NodeRef top = node;
+    for (; top.depth > 0 && h.state(top.parent()) == NodeState::Erased; top = top.parent())
+      faces = static_cast<std::uint8_t>(faces | m_face_mask[top.depth - 1]);
+    mark(top, faces);
+    return Enter::Done;
   }
   // Partly covered, above the finest level: descend.
   bool refined_here = false;
   if (st == NodeState::Full) {
     // Decide before refining: a partly covered full leaf none of whose descendants would
     // go stays a leaf.
-    if (node.depth >= kMaxDepth || !would_remove(x, node.depth, finest, m_centre, m_radius)) return true;
-    if (!h.refine(node)) return true;
+    if (node.depth >= kMaxDepth || !would_remove(x, node.depth, finest, m_centre, m_radius, m_visits)) return Enter::Done;
+    if (!h.refine(node)) return Enter::Done;
     refined_here = true;
     ++stats.nodes_refined;
+    mark(node, face_mask);
   }
-  const TreeTable& t = TreeTable::get();
-  bool go_on = true;
-  for (int s = 0; s < 8 && go_on; ++s) {
-    std::array<Vec3, 4> c;
-    for (std::size_t k = 0; k < 4; ++k) {
-      const auto& e = t.vertex[static_cast<std::size_t>(s)][k];
-      c[k] = 0.5 * (x[e[0]] + x[e[1]]);
-    }
-    std::array<std::int8_t, 4> crf{-1, -1, -1, -1};
-    for (std::size_t f = 0; f < 4; ++f) {
-      const int pf = t.face_link[static_cast<std::size_t>(s)][f].parent_face;
-      if (pf >= 0) crf[f] = root_face[static_cast<std::size_t>(pf)];
-    }
-    go_on = process(h, node.child(s), c, finest, crf, stats);
-  }
-  if (h.state(node) == NodeState::Internal && h.coarsen(node)) {
-    if (refined_here) --stats.nodes_refined;  // nothing removed below: undo
-  } else if (refined_here) {
-    mark(face_mask);
-  }
-  return go_on;
+  m_stack.push_back(Frame{node, x, root_face, static_cast<std::int8_t>(finest), 0, refined_here, face_mask});
+  return Enter::Pushed;
 }
 
-ErosionStats Eroder::erode(TetHierarchy& hierarchy, const Vec3& centre_mm, double radius_mm, double pressing_force_n,
-                           double dt_s) {
-  ErosionStats stats;
-  if (!(pressing_force_n >= m_options.force_threshold_n) || !(radius_mm > 0.0)) return stats;
-  if (!m_unlimited) {
-    const double rate = m_options.removal_rate_mm3_per_s;
-    m_budget = std::min(m_budget + rate * std::max(dt_s, 0.0), 0.1 * rate);
+// Step 7, after the children: a refinement that removed nothing is undone.
+void Eroder::leave(TetHierarchy& h, const Frame& f, ErosionStats& stats) {
+  if (h.state(f.node) == NodeState::Internal && h.coarsen(f.node)) {
+    if (f.refined_here) --stats.nodes_refined;
+    mark(f.node, f.face_mask);
   }
-  m_centre = centre_mm;
-  m_radius = radius_mm;
+}
+
+void Eroder::start_sphere(const TetHierarchy& hierarchy, const Sphere& sphere) {
+  m_centre = sphere.centre;
+  m_radius = sphere.radius;
   const std::size_t n = hierarchy.root_count();
-  if (m_stamp.size() != n) {
-    m_stamp.assign(n, 0);
-    m_is_changed.assign(n, 0);
-    m_slot.assign(n, 0);
-    m_changed.clear();
-    m_changed_faces.clear();
-  }
   if (++m_epoch == 0) {
     std::fill(m_stamp.begin(), m_stamp.end(), 0);
     m_epoch = 1;
   }
   m_candidates.clear();
-  const geometry::Box3 box{centre_mm - Vec3::Constant(radius_mm), centre_mm + Vec3::Constant(radius_mm)};
+  const geometry::Box3 box{m_centre - Vec3::Constant(m_radius), m_centre + Vec3::Constant(m_radius)};
   hierarchy.root_hash().for_each_in_box(box, [&](std::int32_t r) {
+    if (static_cast<std::size_t>(r) >= n) return;
     auto& s = m_stamp[static_cast<std::size_t>(r)];
     if (s == m_epoch) return;
     s = m_epoch;
@@ -208,12 +194,136 @@ ErosionStats Eroder::erode(TetHierarchy& hierarchy, const Vec3& centre_mm, doubl
     m_candidates.push_back(static_cast<std::uint32_t>(r));
   });
   std::sort(m_candidates.begin(), m_candidates.end());
-  for (const std::uint32_t r : m_candidates) {
-    const NodeRef root{r, 0, 0};
-    if (!process(hierarchy, root, hierarchy.world_vertices(root), finest_level(hierarchy, r), {0, 1, 2, 3}, stats))
-      break;
+  m_next_candidate = 0;
+  m_stack.clear();
+  m_active = true;
+}
+
+// The volume budget ran out: finish the frames on the stack (undoing idle refinements) and
+// drop the current and queued positions.
+void Eroder::drop_all(TetHierarchy& h, ErosionStats& stats) {
+  while (!m_stack.empty()) {
+    const Frame f = m_stack.back();
+    m_stack.pop_back();
+    leave(h, f, stats);
   }
+  m_active = false;
+  m_queue.clear();
+  m_queue_head = 0;
+}
+
+void Eroder::enqueue(const Vec3& centre_mm, double radius_mm, double pressing_force_n, double dt_s) {
+  if (!(pressing_force_n >= m_options.force_threshold_n) || !(radius_mm > 0.0) || !centre_mm.allFinite()) return;
+  if (!m_unlimited) {
+    const double rate = m_options.removal_rate_mm3_per_s;
+    m_budget = std::min(m_budget + rate * std::max(dt_s, 0.0), 0.1 * rate);
+  }
+  if (m_queue_head == m_queue.size()) {
+    m_queue.clear();
+    m_queue_head = 0;
+  }
+  const Sphere s{centre_mm, radius_mm};
+  const std::size_t waiting = m_queue.size() - m_queue_head;
+  if (m_options.backlog_spacing > 0.0 && waiting >= 1) {
+    // The position before the last queued one: the one queued before it, or the one in
+    // progress.
+    const Sphere current{m_centre, m_radius};
+    const Sphere* before = waiting >= 2 ? &m_queue[m_queue.size() - 2] : (m_active ? &current : nullptr);
+    if (before != nullptr && before->radius == radius_mm &&
+        (before->centre - centre_mm).norm() <= m_options.backlog_spacing * radius_mm) {
+      m_queue.back() = s;
+      return;
+    }
+  }
+  m_queue.push_back(s);
+}
+
+ErosionStats Eroder::run(TetHierarchy& hierarchy, std::size_t max_node_visits) {
+  ErosionStats stats;
+  const std::size_t n = hierarchy.root_count();
+  if (m_stamp.size() != n) {
+    m_stamp.assign(n, 0);
+    m_is_changed.assign(n, 0);
+    m_slot.assign(n, 0);
+    m_changed.clear();
+    m_changed_faces.clear();
+    m_changed_nodes.clear();
+  }
+  m_visits = 0;
+  if (m_active && !m_stack.empty()) {
+    // Resuming: geometry may have moved (set_vertex_positions) and is derived again; frames
+    // whose node is no longer internal are dropped.
+    std::size_t keep = 0;
+    while (keep < m_stack.size() && hierarchy.state(m_stack[keep].node) == NodeState::Internal) ++keep;
+    m_stack.resize(keep);
+    for (auto& f : m_stack) {
+      f.x = hierarchy.world_vertices(f.node);
+      m_face_mask[f.node.depth] = f.face_mask;
+    }
+  }
+  const TreeTable& t = TreeTable::get();
+  auto exhausted = [&] { return max_node_visits > 0 && m_visits >= max_node_visits; };
+  for (;;) {
+    if (!m_active) {
+      if (m_queue_head == m_queue.size()) break;
+      start_sphere(hierarchy, m_queue[m_queue_head++]);
+    }
+    bool aborted = false;
+    for (;;) {
+      if (exhausted()) {
+        stats.nodes_visited = m_visits;
+        stats.work_pending = true;
+        return stats;
+      }
+      Enter e = Enter::Done;
+      if (!m_stack.empty()) {
+        Frame& f = m_stack.back();
+        if (f.next_child == 8) {
+          const Frame done = f;
+          m_stack.pop_back();
+          leave(hierarchy, done, stats);
+          continue;
+        }
+        const auto s = static_cast<std::size_t>(f.next_child++);
+        std::array<Vec3, 4> c;
+        for (std::size_t k = 0; k < 4; ++k) {
+          const auto& ev = t.vertex[s][k];
+          c[k] = 0.5 * (f.x[ev[0]] + f.x[ev[1]]);
+        }
+        std::array<std::int8_t, 4> crf{-1, -1, -1, -1};
+        for (std::size_t k = 0; k < 4; ++k) {
+          const int pf = t.face_link[s][k].parent_face;
+          if (pf >= 0) crf[k] = f.root_face[static_cast<std::size_t>(pf)];
+        }
+        const NodeRef child = f.node.child(static_cast<int>(s));
+        const int finest = f.finest;
+        e = enter(hierarchy, child, c, finest, crf, stats);  // may push (invalidates f)
+      } else if (m_next_candidate < m_candidates.size()) {
+        const std::uint32_t r = m_candidates[m_next_candidate++];
+        const NodeRef root{r, 0, 0};
+        e = enter(hierarchy, root, hierarchy.world_vertices(root), finest_level(hierarchy, r), {0, 1, 2, 3}, stats);
+      } else {
+        break;  // this sphere is done
+      }
+      if (e == Enter::Abort) {
+        aborted = true;
+        break;
+      }
+    }
+    if (aborted) {
+      drop_all(hierarchy, stats);
+      break;
+    }
+    m_active = false;
+  }
+  stats.nodes_visited = m_visits;
   return stats;
+}
+
+ErosionStats Eroder::erode(TetHierarchy& hierarchy, const Vec3& centre_mm, double radius_mm, double pressing_force_n,
+                           double dt_s) {
+  enqueue(centre_mm, radius_mm, pressing_force_n, dt_s);
+  return run(hierarchy, m_options.max_node_visits);
 }
 
 }  // namespace ido::drill

@@ -31,19 +31,31 @@ Simulator::Simulator(TetHierarchy& hierarchy, HapticDevice& device, const Simula
       m_options(options),
       m_tool(options.tool),
       m_eroder(options.erosion),
-      m_surface(hierarchy),
+      m_surface(hierarchy, options.surface),
       m_coupling(options.coupling) {
   if (!(options.haptic_period_s > 0.0) || !std::isfinite(options.haptic_period_s)) {
     throw InvalidInput("simulator: haptic period must be positive");
   }
   m_render_lists = m_surface.v_lists();
-  m_pending_mark.assign(hierarchy.root_count(), 0);
+  m_render_chunks.resize(hierarchy.root_count());
+  for (std::size_t r = 0; r < hierarchy.root_count(); ++r) {
+    m_render_chunks[r].resize(m_surface.chunk_count(r));
+    for (std::size_t c = 0; c < m_surface.chunk_count(r); ++c) m_render_chunks[r][c] = m_surface.chunk(r, c);
+  }
   m_tick_period.assign(options.max_haptic_ticks, 0.0);
   m_tick_compute.assign(options.max_haptic_ticks, 0.0);
   m_tick_force.assign(options.max_haptic_ticks, 0.0);
 }
 
 Simulator::~Simulator() { stop(); }
+
+void Simulator::set_surface_snapshots(SurfaceSnapshotFn fn, double period_s, double end_s) {
+  if (!(period_s > 0.0) || !std::isfinite(period_s)) throw InvalidInput("simulator: snapshot period must be positive");
+  m_snapshot_fn = std::move(fn);
+  m_snapshot_period_s = period_s;
+  m_snapshot_end_s = std::max(0.0, end_s);
+  m_next_snapshot = 0;
+}
 
 double Simulator::now_s() const noexcept {
   const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count();
@@ -77,6 +89,9 @@ void Simulator::stop() {
   m_collision.join();
   m_render.join();
   m_running = false;
+  m_render_lists.assign(m_render_chunks.size(), {});
+  for (std::size_t r = 0; r < m_render_chunks.size(); ++r)
+    for (const auto& c : m_render_chunks[r]) m_render_lists[r].insert(m_render_lists[r].end(), c.begin(), c.end());
   const std::size_t n = std::min(m_stats.haptic_ticks, m_tick_period.size());
   m_stats.haptic_period_s.assign(m_tick_period.begin() + (n > 0 ? 1 : 0), m_tick_period.begin() + static_cast<std::ptrdiff_t>(n));
   m_stats.force_compute_time_s.assign(m_tick_compute.begin(), m_tick_compute.begin() + static_cast<std::ptrdiff_t>(n));
@@ -148,6 +163,20 @@ void Simulator::haptic_loop() {
   }
 }
 
+void Simulator::send_pending() {
+  if (m_pending.empty()) return;
+  std::sort(m_pending.begin(), m_pending.end());
+  m_pending.erase(std::unique(m_pending.begin(), m_pending.end()), m_pending.end());
+  auto snap = std::make_unique<Snapshot>();
+  snap->chunks = m_pending;
+  snap->lists.reserve(m_pending.size());
+  for (const ChunkId& c : m_pending) {
+    snap->chunk_counts.push_back(static_cast<std::uint32_t>(m_surface.chunk_count(c.root)));
+    snap->lists.push_back(m_surface.chunk(c.root, c.chunk));
+  }
+  if (m_snapshots.push(snap)) m_pending.clear();
+}
+
 void Simulator::collision_loop() {
   std::uint64_t last_seq = 0;
   bool have_last = false;
@@ -155,65 +184,75 @@ void Simulator::collision_loop() {
   double last_t = 0.0;
   const double r = m_tool.burr_radius();
   const double substep = m_options.max_substep_mm > 0.0 ? m_options.max_substep_mm : 0.25 * r;
+  const std::size_t budget = m_options.erosion.max_node_visits;
   while (!m_stop.load(std::memory_order_relaxed)) {
-    if (!m_pose_buffer.has_new()) {
+    const bool fresh = m_pose_buffer.has_new();
+    if (!fresh && !m_eroder.has_pending() && !m_surface.has_pending()) {
       std::this_thread::sleep_for(std::chrono::microseconds(200));
       continue;
     }
-    const PoseSample s = m_pose_buffer.read();
-    if (s.sequence == last_seq) continue;
-    last_seq = s.sequence;
     const double t0 = now_s();
-    const Vec3 c = s.pose.position_mm;
-    const double dt = have_last ? std::max(0.0, s.t_s - last_t) : 0.0;
-    const Vec3 from = have_last ? last_centre : c;
-    const int n = std::max(1, static_cast<int>(std::ceil((c - from).norm() / substep)));
-    for (int i = 1; i <= n; ++i) {
-      const Vec3 p = from + (c - from) * (static_cast<double>(i) / n);
-      m_stats.removed_volume_mm3 += m_eroder.erode(m_hierarchy, p, r, s.force_n, dt / n).removed_volume_mm3;
+    bool new_pose = false;
+    PoseSample s;
+    if (fresh) {
+      s = m_pose_buffer.read();
+      new_pose = s.sequence != last_seq;
     }
-    have_last = true;
-    last_centre = c;
-    last_t = s.t_s;
-    m_contact_buffer.write(collide(m_hierarchy, m_tool, s.pose));
-    // Changed v_lists: rebuild and hand a snapshot to the render consumer.
-    if (!m_eroder.changed_roots().empty()) {
-      m_surface.update(m_hierarchy, m_eroder.changed_roots(), m_eroder.changed_root_faces());
+    if (new_pose) {
+      last_seq = s.sequence;
+      const Vec3 c = s.pose.position_mm;
+      const double dt = have_last ? std::max(0.0, s.t_s - last_t) : 0.0;
+      const Vec3 from = have_last ? last_centre : c;
+      const int n = std::max(1, static_cast<int>(std::ceil((c - from).norm() / substep)));
+      for (int i = 1; i <= n; ++i) m_eroder.enqueue(from + (c - from) * (static_cast<double>(i) / n), r, s.force_n, dt / n);
+      m_stats.erosion_backlog_max = std::max(m_stats.erosion_backlog_max, m_eroder.queued());
+      have_last = true;
+      last_centre = c;
+      last_t = s.t_s;
+    } else if (!m_eroder.has_pending() && !m_surface.has_pending()) {
+      continue;
+    }
+    const ErosionStats es = m_eroder.run(m_hierarchy, budget);
+    m_stats.removed_volume_mm3 += es.removed_volume_mm3;
+    m_stats.erosion_visits.push_back(static_cast<double>(es.nodes_visited));
+    if (new_pose) m_contact_buffer.write(collide(m_hierarchy, m_tool, s.pose));
+    // Changed v_list chunks: rebuild and hand them to the render consumer.
+    if (!m_eroder.changed_nodes().empty() || m_surface.has_pending()) {
+      m_surface.update(m_hierarchy, m_eroder.changed_nodes(), m_options.surface_visits_per_update);
       m_eroder.clear_changed_roots();
-      for (const std::uint32_t root : m_surface.last_rebuilt()) {
-        if (!m_pending_mark[root]) {
-          m_pending_mark[root] = 1;
-          m_pending.push_back(root);
-        }
-      }
+      m_pending.insert(m_pending.end(), m_surface.last_rebuilt_chunks().begin(), m_surface.last_rebuilt_chunks().end());
+    } else if (!m_eroder.changed_roots().empty()) {
+      m_eroder.clear_changed_roots();
     }
     const double t1 = now_s();
     m_stats.update_time_s.push_back(t1 - t0);
     ++m_stats.collision_updates;
-    if (!m_pending.empty()) {
-      auto snap = std::make_unique<Snapshot>();
-      snap->roots = m_pending;
-      for (const std::uint32_t root : m_pending) snap->lists.push_back(m_surface.v_list(root));
-      if (m_snapshots.push(snap)) {
-        for (const std::uint32_t root : m_pending) m_pending_mark[root] = 0;
-        m_pending.clear();
-      }
-    }
-    if (m_device.finished(s.t_s)) m_collision_done.store(true, std::memory_order_release);
+    send_pending();
+    if (have_last && m_device.finished(last_t) && !m_eroder.has_pending() && !m_surface.has_pending())
+      m_collision_done.store(true, std::memory_order_release);
   }
   // Hand over what is still pending (the render consumer runs until we have exited).
   while (!m_pending.empty()) {
-    auto snap = std::make_unique<Snapshot>();
-    snap->roots = m_pending;
-    for (const std::uint32_t root : m_pending) snap->lists.push_back(m_surface.v_list(root));
-    if (m_snapshots.push(snap)) {
-      for (const std::uint32_t root : m_pending) m_pending_mark[root] = 0;
-      m_pending.clear();
-    } else {
-      std::this_thread::sleep_for(std::chrono::milliseconds(1));
-    }
+    send_pending();
+    if (!m_pending.empty()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
   m_collision_exited.store(true, std::memory_order_release);
+}
+
+void Simulator::take_surface_snapshots(bool final) {
+  if (!m_snapshot_fn) return;
+  const double now = now_s();
+  for (;;) {
+    const double t = static_cast<double>(m_next_snapshot) * m_snapshot_period_s;
+    if (t > m_snapshot_end_s + 1e-9 * m_snapshot_period_s) return;
+    if (!final && now < t) return;
+    std::vector<std::vector<SurfaceFace>> lists(m_render_chunks.size());
+    for (std::size_t r = 0; r < m_render_chunks.size(); ++r)
+      for (const auto& c : m_render_chunks[r]) lists[r].insert(lists[r].end(), c.begin(), c.end());
+    m_snapshot_fn(t, lists);
+    ++m_next_snapshot;
+    ++m_stats.surface_snapshots;
+  }
 }
 
 void Simulator::render_loop() {
@@ -222,10 +261,19 @@ void Simulator::render_loop() {
     // Read the flag before draining: after it is seen set, one more drain gets everything.
     const bool collision_exited = m_collision_exited.load(std::memory_order_acquire);
     while (auto snap = m_snapshots.pop()) {
-      for (std::size_t i = 0; i < (*snap)->roots.size(); ++i) m_render_lists[(*snap)->roots[i]] = std::move((*snap)->lists[i]);
+      auto& sn = **snap;
+      for (std::size_t i = 0; i < sn.chunks.size(); ++i) {
+        auto& root = m_render_chunks[sn.chunks[i].root];
+        if (root.size() < sn.chunk_counts[i]) root.resize(sn.chunk_counts[i]);
+        root[sn.chunks[i].chunk] = std::move(sn.lists[i]);
+      }
       ++m_stats.render_snapshots;
     }
-    if (collision_exited) break;
+    if (collision_exited) {
+      take_surface_snapshots(true);
+      break;
+    }
+    take_surface_snapshots(false);
     std::this_thread::sleep_for(period);
   }
 }

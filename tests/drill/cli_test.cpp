@@ -1,6 +1,10 @@
 // SPDX-License-Identifier: Apache-2.0
 // `ido tetmesh` and `ido drill` end to end.
+#include <png.h>
+
+#include <cstdio>
 #include <fstream>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -45,6 +49,85 @@ TEST(DrillCli, TetmeshThenDrillWritesConsistentOutputs) {
   ASSERT_TRUE(out.cell_fields.count("density"));
   EXPECT_EQ(out.cell_fields.at("depth").count(), out.tets.size());
   EXPECT_GT(io::read_triangle_mesh(dir / "out.stl").triangles.size(), 12U);
+}
+
+// RGBA pixels of a PNG (libpng's simplified API); empty when it is not a readable PNG.
+std::vector<std::uint8_t> read_png_rgba(const std::filesystem::path& path, int& width, int& height) {
+  png_image image{};
+  image.version = PNG_IMAGE_VERSION;
+  if (!png_image_begin_read_from_file(&image, path.string().c_str())) return {};
+  image.format = PNG_FORMAT_RGBA;
+  std::vector<std::uint8_t> px(PNG_IMAGE_SIZE(image));
+  if (!png_image_finish_read(&image, nullptr, px.data(), 0, nullptr)) return {};
+  width = static_cast<int>(image.width);
+  height = static_cast<int>(image.height);
+  return px;
+}
+
+std::size_t differing_pixels(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b) {
+  std::size_t n = 0;
+  for (std::size_t i = 0; i + 3 < a.size() && i + 3 < b.size(); i += 4)
+    n += (a[i] != b[i] || a[i + 1] != b[i + 1] || a[i + 2] != b[i + 2]) ? 1 : 0;
+  return n;
+}
+
+TEST(DrillCli, SnapshotsShowTheSurfaceAsItIsDrilled) {
+  const auto dir = test::scratch_dir("drill_cli_snapshots");
+  const auto block = (dir / "block.vtu").string();
+  ASSERT_EQ(test::run_tool("tetmesh --shape block:12,12,6,2 -o " + block).exit_code, 0);
+  {
+    // Top face at z = 6, burr r = 1.5: in the air until t ≈ 0.29 s (centre above z = 7.5),
+    // then down to z = 4.5 and sideways until 0.8 s.
+    std::ofstream f(dir / "path.csv");
+    f << "t,x,y,z\n0,6,6,10\n0.25,6,6,8\n0.5,6,6,4.5\n0.8,9,7,4.5\n";
+  }
+  const auto shots = dir / "pictures";
+  std::filesystem::create_directories(shots);
+  { std::ofstream(shots / "snapshot_0099.png") << "stale"; }  // an earlier run's picture goes
+  { std::ofstream(shots / "notes.txt") << "kept"; }
+  const auto r = test::run_tool("drill " + block + " --tool sphere:radius=1.5 --path " + (dir / "path.csv").string() + " -o " +
+                                (dir / "out.vtu").string() + " --report " + (dir / "r.json").string() +
+                                " --max-depth 3 --snapshots " + shots.string() + " --snapshot-every 0.1 --snapshot-size 160x120");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream in(dir / "r.json");
+  const auto rep = nlohmann::json::parse(in);
+  // Pictures at t = 0, 0.1, …, 0.8 s: duration / period + 1.
+  ASSERT_EQ(rep["snapshots"].size(), 9U);
+  EXPECT_FALSE(std::filesystem::exists(shots / "snapshot_0099.png"));
+  EXPECT_TRUE(std::filesystem::exists(shots / "notes.txt"));
+  std::vector<std::vector<std::uint8_t>> pictures;
+  for (std::size_t k = 0; k < 9; ++k) {
+    const std::filesystem::path p = rep["snapshots"][k].get<std::string>();
+    char name[32];
+    std::snprintf(name, sizeof name, "snapshot_%04zu.png", k);
+    EXPECT_EQ(p.filename().string(), name);
+    std::ifstream f(p, std::ios::binary);
+    char magic[8] = {};
+    f.read(magic, 8);
+    ASSERT_EQ(std::string(magic, 8), std::string("\x89PNG\r\n\x1a\n", 8)) << p;
+    int w = 0, h = 0;
+    pictures.push_back(read_png_rgba(p, w, h));
+    ASSERT_EQ(w, 160);
+    ASSERT_EQ(h, 120);
+  }
+  // Before the burr touches (t = 0, 0.1, 0.2 s) nothing changes: identical pictures.
+  EXPECT_EQ(differing_pixels(pictures[0], pictures[1]), 0U);
+  EXPECT_EQ(differing_pixels(pictures[1], pictures[2]), 0U);
+  // While it cuts (plunge, then sideways) every picture differs from the one before, and the
+  // drilled block differs from the intact one in a region of visible size.
+  for (std::size_t k = 4; k < 9; ++k) EXPECT_GT(differing_pixels(pictures[k - 1], pictures[k]), 0U) << "picture " << k;
+  EXPECT_GT(differing_pixels(pictures[0], pictures[8]), 100U);
+  const double removed = rep["removed_volume_mm3"];
+  EXPECT_GT(removed, 0.5 * 4.0 / 3.0 * kPi * 1.5 * 1.5 * 1.5);
+  // Bad snapshot arguments: exit 2 naming the option.
+  auto bad = test::run_tool("drill " + block + " --tool sphere:radius=1.5 --path " + (dir / "path.csv").string() + " -o " +
+                            (dir / "o2.vtu").string() + " --snapshots " + shots.string() + " --snapshot-every 0");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("--snapshot-every"), std::string::npos);
+  bad = test::run_tool("drill " + block + " --tool sphere:radius=1.5 --path " + (dir / "path.csv").string() + " -o " +
+                       (dir / "o2.vtu").string() + " --snapshots " + (dir / "path.csv").string());
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("not a folder"), std::string::npos);
 }
 
 TEST(DrillCli, BadInputIsExitTwoWithAMessage) {

@@ -168,7 +168,7 @@ TEST(BoundarySurface, ClosedAndEnclosesTheLeafVolumeAfterRandomDrilling) {
 
 TEST(Erosion, BelowTheThresholdNothingGoesAndRateLimitsRemoval) {
   TetHierarchy h(make_block({10, 10, 10}, 2.5));
-  Eroder eroder({.force_threshold_n = 1.0, .removal_rate_mm3_per_s = 10.0, .max_depth = 5});
+  Eroder eroder({.force_threshold_n = 1.0, .removal_rate_mm3_per_s = 10.0, .max_depth = 5, .max_node_visits = 0});
   const double before = h.material_volume();
   auto stats = eroder.erode(h, Vec3(5, 5, 10), 2.0, 0.5, 0.01);
   EXPECT_EQ(stats.nodes_removed, 0U);
@@ -181,10 +181,85 @@ TEST(Erosion, BelowTheThresholdNothingGoesAndRateLimitsRemoval) {
   // Denser material erodes more slowly.
   TetHierarchy dense(make_block({10, 10, 10}, 2.5));
   for (std::size_t r = 0; r < dense.root_count(); ++r) dense.set_density(r, 2.0F);
-  Eroder e2({.force_threshold_n = 1.0, .removal_rate_mm3_per_s = 10.0, .max_depth = 5});
+  Eroder e2({.force_threshold_n = 1.0, .removal_rate_mm3_per_s = 10.0, .max_depth = 5, .max_node_visits = 0});
   double removed_dense = 0.0;
   for (int i = 0; i < 10; ++i) removed_dense += e2.erode(dense, Vec3(5, 5, 10), 2.0, 2.0, 0.01).removed_volume_mm3;
   EXPECT_LE(removed_dense, 0.5 * 10.0 * 0.1 + 1e-9);
+}
+
+// Leaf states of every root, depth-first: equal trees give equal lists.
+std::vector<std::pair<std::uint64_t, int>> leaves_of(const TetHierarchy& h) {
+  std::vector<std::pair<std::uint64_t, int>> out;
+  for (std::size_t r = 0; r < h.root_count(); ++r)
+    h.for_each_leaf(r, [&](const NodeRef& n, NodeState s) {
+      out.emplace_back((static_cast<std::uint64_t>(n.root) << 40) | (static_cast<std::uint64_t>(n.depth) << 32) | n.path,
+                       static_cast<int>(s));
+    });
+  return out;
+}
+
+TEST(Erosion, VisitBudgetSplitsTheWorkButNotTheResult) {
+  // The same burr positions with no budget and with a budget of 400 visits per pass (v_list rebuilds 300) (and
+  // no coalescing): every pass does at most the budget plus one dry run, the work carries
+  // over, and once finished the trees are identical. Meanwhile the chunked v_lists rebuilt
+  // from the changed nodes equal a full rebuild (after flushing) every 40 passes, at chunk levels 0, 2, 3.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<Vec3> centres;
+  for (int i = 0; i < 16; ++i) centres.emplace_back(1 + 8 * u(rng), 1 + 6 * u(rng), 1 + 4 * u(rng));
+  TetHierarchy reference(make_block({10, 8, 6}, 2.0));
+  Eroder full({.removal_rate_mm3_per_s = 0.0, .max_depth = 4, .max_node_visits = 0});
+  for (const auto& c : centres) full.erode(reference, c, 1.2, 1.0, 0.01);
+  for (const int level : {0, 2, 3}) {
+    TetHierarchy h(make_block({10, 8, 6}, 2.0));
+    BoundarySurface surface(h, {.chunk_level = level});
+    Eroder budgeted({.removal_rate_mm3_per_s = 0.0, .max_depth = 4, .max_node_visits = 400, .backlog_spacing = 0.0});
+    std::size_t passes = 0, carried = 0;
+    auto pass = [&](const ErosionStats& st) {
+      ++passes;
+      carried += st.work_pending ? 1 : 0;
+      // One dry run may overshoot the budget: at most the nodes below a depth-0 leaf.
+      EXPECT_LE(st.nodes_visited, 400U + 8U * 8U * 8U * 8U * 2U);
+      // The v_list rebuild has a budget too: chunks left over wait for a later update.
+      surface.update(h, budgeted.changed_nodes(), 300);
+      budgeted.clear_changed_roots();
+      if (passes % 40 != 0) return;
+      surface.flush(h);
+      EXPECT_FALSE(surface.has_pending());
+      const BoundarySurface fresh(h, {.chunk_level = level});
+      for (std::size_t r = 0; r < h.root_count(); ++r)
+        ASSERT_TRUE(fresh.v_list(r) == surface.v_list(r)) << "level " << level << " pass " << passes << " root " << r;
+    };
+    for (const auto& c : centres) pass(budgeted.erode(h, c, 1.2, 1.0, 0.01));
+    while (budgeted.has_pending()) pass(budgeted.run(h, 400));
+    surface.flush(h);
+    EXPECT_GT(carried, 10U) << "the budget never ran out: the test does not test it";
+    std::printf("chunk level %d: %zu passes, %zu carried over\n", level, passes, carried);
+    EXPECT_EQ(h.node_count(), reference.node_count());
+    EXPECT_EQ(h.material_volume(), reference.material_volume());
+    EXPECT_TRUE(leaves_of(h) == leaves_of(reference));
+    const BoundarySurface fresh(h, {.chunk_level = level});
+    for (std::size_t r = 0; r < h.root_count(); ++r) ASSERT_TRUE(fresh.v_list(r) == surface.v_list(r));
+    const auto mesh = assemble_surface(surface.v_lists(), h.vertices());
+    const auto check = check_surface(mesh);
+    EXPECT_EQ(check.boundary_edges, 0U);
+    EXPECT_TRUE(test::rel_near(check.volume, h.material_volume(), 1e-9));
+  }
+}
+
+TEST(Erosion, BacklogKeepsPositionsAtMostTheSpacingApart) {
+  // With a tiny budget the queue would grow by one position per call; coalescing keeps
+  // only positions ≥ spacing · radius apart (plus the newest).
+  TetHierarchy h(make_block({20, 8, 6}, 2.0));
+  Eroder e({.removal_rate_mm3_per_s = 0.0, .max_depth = 4, .max_node_visits = 1, .backlog_spacing = 0.25});
+  for (int i = 0; i <= 200; ++i) e.erode(h, Vec3(2 + 0.05 * i, 4, 6), 1.0, 1.0, 1e-3);
+  // 10 mm at spacing 0.25 mm: about 40 positions, far fewer than the 200 calls.
+  EXPECT_LE(e.queued(), 45U);
+  EXPECT_GE(e.queued(), 25U);
+  EXPECT_TRUE(e.has_pending());
+  const auto st = e.finish(h);
+  EXPECT_FALSE(e.has_pending());
+  EXPECT_GT(st.removed_volume_mm3, 0.0);
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <array>
+#include <compare>
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -30,16 +31,40 @@ struct PointKey {
 /// A visible face, counter-clockwise seen from outside the material.
 using SurfaceFace = std::array<PointKey, 3>;
 
+/// Options of BoundarySurface.
+struct BoundarySurfaceOptions {
+  /// Level of the sub-trees ("chunks") whose face lists are kept and rebuilt separately:
+  /// a refined root holds 8^chunk_level lists in depth-first order, and an update rebuilds
+  /// only the chunks holding a changed node or lying across one of its faces. 0 = whole
+  /// roots. Range 0–4; default 3.
+  int chunk_level = 3;
+};
+
+/// Names one chunk's face list: root and chunk index (depth-first order of the sub-trees at
+/// BoundarySurfaceOptions::chunk_level; 0 for a root kept whole).
+struct ChunkId {
+  std::uint32_t root = 0;
+  std::uint32_t chunk = 0;
+  friend bool operator==(const ChunkId&, const ChunkId&) = default;
+  friend auto operator<=>(const ChunkId&, const ChunkId&) = default;
+};
+
 /// The boundary surface of the remaining material (the paper's per-root v_list): for each
 /// root, the faces of its full leaves that border erased material or the outside of the
 /// mesh. Where the leaf across a face is refined deeper, the face is split (recursively,
 /// following the neighbour's red refinement) and only the parts bordering erased material
 /// are kept, so the surface has no cracks. assemble_surface() then splits edges at the
 /// vertices of finer neighbours, so it has no T-junctions either.
+///
+/// Storage: a root that was never refined keeps one list; a refined root keeps one list per
+/// chunk (sub-tree at chunk_level; the faces of a leaf shallower than that go to the first
+/// chunk it covers). Concatenated in chunk order they are exactly the v_list of a full
+/// depth-first walk. v_list() and v_lists() concatenate on request (cached until the next
+/// update), so they cost O(faces) after a change; the chunk accessors cost nothing.
 class BoundarySurface {
  public:
-  /// Builds every root's v_list.
-  explicit BoundarySurface(const TetHierarchy& hierarchy);
+  /// Builds every root's v_list. @throws ido::InvalidInput for chunk_level outside 0–4.
+  explicit BoundarySurface(const TetHierarchy& hierarchy, const BoundarySurfaceOptions& options = {});
   ~BoundarySurface();
   BoundarySurface(BoundarySurface&&) noexcept;
   BoundarySurface& operator=(BoundarySurface&&) noexcept;
@@ -52,23 +77,69 @@ class BoundarySurface {
   /// had a face on that root face), so untouched neighbours are not rebuilt.
   void update(const TetHierarchy& hierarchy, std::span<const std::uint32_t> changed_roots,
               std::span<const std::uint8_t> changed_faces);
+  /// Rebuilds only the chunks affected by the nodes in @p changed_nodes (Eroder::changed_nodes):
+  /// each node's chunk(s) and the chunks across its faces (in this or a neighbouring root).
+  /// The result equals a full rebuild. last_rebuilt() lists the roots touched and
+  /// last_rebuilt_chunks() the chunk lists rewritten.
+  void update(const TetHierarchy& hierarchy, std::span<const NodeRef> changed_nodes);
+  /// As above, but stops once @p max_node_visits nodes were walked (after the chunk in
+  /// progress; 0 = unlimited): the chunks not rebuilt yet stay queued for the next update or
+  /// flush(), so until then the v_lists lag the tree.
+  void update(const TetHierarchy& hierarchy, std::span<const NodeRef> changed_nodes, std::size_t max_node_visits);
+  /// True when chunks wait to be rebuilt (a budgeted update stopped early).
+  [[nodiscard]] bool has_pending() const noexcept { return !m_dirty.empty(); }
+  /// Rebuilds every waiting chunk.
+  void flush(const TetHierarchy& hierarchy) { update(hierarchy, std::span<const NodeRef>{}, 0); }
   /// Rebuilds every v_list.
   void rebuild_all(const TetHierarchy& hierarchy);
 
-  [[nodiscard]] std::size_t root_count() const noexcept { return m_faces.size(); }
-  [[nodiscard]] const std::vector<SurfaceFace>& v_list(std::size_t r) const noexcept { return m_faces[r]; }
-  [[nodiscard]] const std::vector<std::vector<SurfaceFace>>& v_lists() const noexcept { return m_faces; }
+  [[nodiscard]] std::size_t root_count() const noexcept { return m_chunks.size(); }
+  /// The v_list of root @p r (its chunk lists concatenated; valid until the next update).
+  [[nodiscard]] const std::vector<SurfaceFace>& v_list(std::size_t r) const;
+  /// Every root's v_list (valid until the next update).
+  [[nodiscard]] const std::vector<std::vector<SurfaceFace>>& v_lists() const;
   [[nodiscard]] const std::vector<std::uint32_t>& last_rebuilt() const noexcept { return m_rebuilt; }
+  /// Chunk lists rewritten by the last update (sorted, each once).
+  [[nodiscard]] const std::vector<ChunkId>& last_rebuilt_chunks() const noexcept { return m_rebuilt_chunks; }
+  /// Chunk lists of root @p r: 1 (a root never refined) or 8^chunk_level.
+  [[nodiscard]] std::size_t chunk_count(std::size_t r) const noexcept { return m_chunks[r].size(); }
+  /// Faces of chunk @p c of root @p r.
+  [[nodiscard]] const std::vector<SurfaceFace>& chunk(std::size_t r, std::size_t c) const noexcept { return m_chunks[r][c]; }
+  /// Node visits of the last update or rebuild (work done).
+  [[nodiscard]] std::size_t last_visits() const noexcept { return m_visits; }
   /// Faces over all v_lists.
   [[nodiscard]] std::size_t face_count() const noexcept;
+  [[nodiscard]] const BoundarySurfaceOptions& options() const noexcept { return m_options; }
 
  private:
-  void rebuild_root(const TetHierarchy& hierarchy, std::size_t r);
+  struct Range {
+    std::uint32_t root = 0;
+    std::uint32_t lo = 0, hi = 0;  // chunk indices at the full chunk level
+  };
+  void rebuild_ranges(const TetHierarchy& hierarchy, std::size_t max_node_visits = 0);
+  std::uint32_t rebuild_range(const TetHierarchy& hierarchy, std::uint32_t r, std::uint32_t lo, std::uint32_t hi,
+                              std::size_t max_node_visits);
+  void mark_node(const TetHierarchy& hierarchy, const NodeRef& node);
+  void mark_faces(const TetHierarchy& hierarchy);
+  void mark_root(std::uint32_t r);
 
-  std::vector<std::vector<SurfaceFace>> m_faces;
+  BoundarySurfaceOptions m_options;
+  std::uint32_t m_full_chunks = 1;  // 8^chunk_level
+  std::vector<std::vector<std::vector<SurfaceFace>>> m_chunks;
+  mutable std::vector<std::vector<SurfaceFace>> m_flat;
+  mutable std::vector<std::uint8_t> m_flat_stale;
+  mutable std::vector<std::uint32_t> m_stale_roots;
   std::vector<std::uint32_t> m_rebuilt;
+  std::vector<ChunkId> m_rebuilt_chunks;
+  std::vector<Range> m_dirty;
+  struct FaceMark {
+    NodeRef node;
+    std::uint8_t faces = 0;
+  };
+  std::vector<FaceMark> m_face_marks;
   std::vector<std::uint8_t> m_mark;
-  std::unique_ptr<struct AcrossCache> m_cache;  // scratch memo of face neighbours
+  std::size_t m_visits = 0;
+  std::uint32_t m_range_end = 0;  // end of the range rebuild_range stopped in (0: it finished)
 };
 
 /// The welded, crack-free triangle mesh (mm) of the faces in @p v_lists on mesh vertices

@@ -23,6 +23,18 @@ struct ErosionOptions {
   /// > 0: the finest level of each root is the first whose leaves' longest edge is
   /// ≤ min_size_mm (capped at kMaxDepth); overrides max_depth.
   double min_size_mm = 0.0;
+  /// Work budget of one erosion pass (Eroder::erode, Eroder::run): nodes visited (each a
+  /// sphere–tetrahedron test, dry-run visits included). When it runs out the pass stops;
+  /// the interrupted traversal and the queued burr positions carry over to the next pass,
+  /// so one pass costs O(budget) whatever the depth while the removed volume still
+  /// converges (Eroder::finish completes the backlog). 0 = unlimited. Default 6000 visits
+  /// (≈ 0.3 ms on the reference machine, bench/results/drill.md).
+  std::size_t max_node_visits = 6000;
+  /// While work is carried over, a newly queued burr position replaces the last queued
+  /// (not yet started) one when the position before that is within backlog_spacing ×
+  /// radius of it: the backlog keeps positions at most that far apart, the same rule as the
+  /// simulator's sub-steps (radius / 4), so the swept volume stays covered. ≤ 0: keep all.
+  double backlog_spacing = 0.25;
 };
 
 /// What one erosion call did.
@@ -31,6 +43,8 @@ struct ErosionStats {
   std::size_t nodes_removed = 0;
   std::size_t nodes_refined = 0;
   bool rate_limited = false;  ///< the volume budget ran out before the burr's region was done
+  std::size_t nodes_visited = 0;  ///< sphere tests made (work done)
+  bool work_pending = false;      ///< the visit budget ran out: work carried over
 };
 
 /// Removes material covered by a spherical burr (Turini et al. 2007: nodes in contact are
@@ -40,15 +54,40 @@ struct ErosionStats {
 /// the sphere; a partly covered full leaf is refined only when a dry run on its derived
 /// geometry finds a descendant that will go (so only the cut's boundary becomes fine, and
 /// nothing is refined and then undone). The volume budget grows by removal_rate · dt while the pressing force is at
-/// least the threshold (capped at 0.1 s worth) and carries over between calls.
+/// least the threshold (capped at 0.1 s worth) and carries over between calls; when it runs
+/// out, the current burr position and the queued ones are dropped.
+///
+/// Bounded work (as haptic drilling systems bound one collision update): burr positions are
+/// queued and processed first in, first out by an explicit depth-first traversal that stops
+/// after ErosionOptions::max_node_visits node visits and resumes there on the next pass.
+/// Processing order and decisions do not depend on the budget, so when no positions are
+/// coalesced (see backlog_spacing) the final tree is the same with or without it.
 class Eroder {
  public:
   /// @throws ido::InvalidInput for max_depth outside [0, kMaxDepth] or a negative size.
   explicit Eroder(const ErosionOptions& options = {});
 
-  /// One erosion step with the burr centred at @p centre_mm of radius @p radius_mm.
+  /// One erosion step with the burr centred at @p centre_mm of radius @p radius_mm:
+  /// enqueue() then run() with the options' visit budget.
   ErosionStats erode(TetHierarchy& hierarchy, const Vec3& centre_mm, double radius_mm, double pressing_force_n,
                      double dt_s);
+  /// Queues a burr position (mm) when @p pressing_force_n reaches the threshold (and adds
+  /// rate · dt to the volume budget); otherwise does nothing.
+  void enqueue(const Vec3& centre_mm, double radius_mm, double pressing_force_n, double dt_s);
+  /// Processes queued work until the queue is empty or @p max_node_visits nodes were
+  /// visited (0 = unlimited); what is left carries over.
+  ErosionStats run(TetHierarchy& hierarchy, std::size_t max_node_visits);
+  /// Processes all queued work (run with no budget).
+  ErosionStats finish(TetHierarchy& hierarchy) { return run(hierarchy, 0); }
+  /// True when queued or interrupted work is waiting.
+  [[nodiscard]] bool has_pending() const noexcept { return m_active || m_queue_head < m_queue.size(); }
+  /// Burr positions waiting (not counting the one in progress).
+  [[nodiscard]] std::size_t queued() const noexcept { return m_queue.size() - m_queue_head; }
+
+  /// Nodes changed (erased — the topmost merged ancestor —, refined, or coarsened back)
+  /// since the last clear_changed_roots(), possibly repeated; for
+  /// BoundarySurface::update(hierarchy, nodes), which rebuilds only the affected sub-trees.
+  [[nodiscard]] const std::vector<NodeRef>& changed_nodes() const noexcept { return m_changed_nodes; }
 
   /// Roots whose nodes changed since the last clear_changed_roots() (each listed once).
   [[nodiscard]] const std::vector<std::uint32_t>& changed_roots() const noexcept { return m_changed; }
@@ -64,13 +103,40 @@ class Eroder {
   [[nodiscard]] double budget() const noexcept { return m_budget; }
 
  private:
-  bool process(TetHierarchy& h, const NodeRef& node, const std::array<Vec3, 4>& x, int finest,
-               const std::array<std::int8_t, 4>& root_face, ErosionStats& stats);
+  struct Sphere {
+    Vec3 centre = Vec3::Zero();
+    double radius = 0.0;
+  };
+  // One level of the explicit depth-first traversal: a partly covered node being descended.
+  struct Frame {
+    NodeRef node;
+    std::array<Vec3, 4> x;
+    std::array<std::int8_t, 4> root_face;
+    std::int8_t finest = 0;
+    std::int8_t next_child = 0;
+    bool refined_here = false;
+    std::uint8_t face_mask = 0;
+  };
+  enum class Enter { Done, Pushed, Abort };
+
+  Enter enter(TetHierarchy& h, const NodeRef& node, const std::array<Vec3, 4>& x, int finest,
+              const std::array<std::int8_t, 4>& root_face, ErosionStats& stats);
+  void leave(TetHierarchy& h, const Frame& f, ErosionStats& stats);
+  void mark(const NodeRef& node, std::uint8_t faces);
+  void start_sphere(const TetHierarchy& h, const Sphere& s);
+  void drop_all(TetHierarchy& h, ErosionStats& stats);
   bool pay(double cost) noexcept;
 
   ErosionOptions m_options;
   Vec3 m_centre = Vec3::Zero();
   double m_radius = 0.0;
+  std::vector<Sphere> m_queue;
+  std::size_t m_queue_head = 0;
+  bool m_active = false;  // a sphere is in progress (m_centre, m_radius)
+  std::size_t m_next_candidate = 0;
+  std::vector<Frame> m_stack;
+  std::size_t m_visits = 0;
+  std::vector<NodeRef> m_changed_nodes;
   double m_budget = 0.0;
   bool m_unlimited = false;
   std::vector<std::uint32_t> m_changed;

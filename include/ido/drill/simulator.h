@@ -3,6 +3,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <thread>
 #include <vector>
@@ -28,7 +29,16 @@ struct SimulatorOptions {
   double max_substep_mm = 0.0;         ///< erosion sub-steps along the motion; 0 = burr radius / 4
   std::size_t max_haptic_ticks = 1U << 20;  ///< timing samples kept (preallocated)
   double render_period_s = 1.0 / 60.0;  ///< render consumer polling period (s)
+  BoundarySurfaceOptions surface;        ///< v_list chunking
+  /// v_list rebuild work per collision update (node visits; 0 = unlimited): chunks not
+  /// rebuilt yet wait for the next update, so the render copy lags by a few updates.
+  /// Default 8000.
+  std::size_t surface_visits_per_update = 8000;
 };
+
+/// A picture request of the render consumer: the boundary surface as the render consumer
+/// holds it at session time @p t_s (s), as per-root v_lists (see assemble_surface).
+using SurfaceSnapshotFn = std::function<void(double t_s, const std::vector<std::vector<SurfaceFace>>& v_lists)>;
 
 /// Order statistics of a series (same unit as the series).
 struct Percentiles {
@@ -47,6 +57,9 @@ struct SessionStats {
   std::size_t missed_deadlines = 0;         ///< ticks finishing after their period ended
   std::size_t collision_updates = 0;
   std::size_t render_snapshots = 0;          ///< snapshots consumed by the render thread
+  std::size_t surface_snapshots = 0;         ///< SurfaceSnapshotFn calls
+  std::vector<double> erosion_visits;        ///< erosion node visits per update
+  std::size_t erosion_backlog_max = 0;       ///< most burr positions queued at once
   double removed_volume_mm3 = 0.0;
   double peak_force_n = 0.0;
   double mean_force_n = 0.0;                  ///< over ticks in contact
@@ -73,6 +86,13 @@ class Simulator {
   Simulator(const Simulator&) = delete;
   Simulator& operator=(const Simulator&) = delete;
 
+  /// Asks the render consumer to call @p fn at session times 0, period, 2·period, … up to
+  /// @p end_s (s) with its copy of the v_lists; times not reached when the session stops
+  /// are served at the stop with the final surface. Runs on the render thread, never on the
+  /// haptic or collision path. Call before start(). @throws ido::InvalidInput for a
+  /// non-positive period.
+  void set_surface_snapshots(SurfaceSnapshotFn fn, double period_s, double end_s);
+
   /// Starts the three threads.
   void start();
   /// Stops and joins them (idempotent).
@@ -96,13 +116,16 @@ class Simulator {
     double force_n = 0.0;
   };
   struct Snapshot {
-    std::vector<std::uint32_t> roots;
+    std::vector<ChunkId> chunks;
+    std::vector<std::uint32_t> chunk_counts;  // the root's chunk count, per entry
     std::vector<std::vector<SurfaceFace>> lists;
   };
 
   void haptic_loop();
   void collision_loop();
   void render_loop();
+  void send_pending();
+  void take_surface_snapshots(bool final);
   [[nodiscard]] double now_s() const noexcept;
 
   TetHierarchy& m_hierarchy;
@@ -116,10 +139,14 @@ class Simulator {
   TripleBuffer<PoseSample> m_pose_buffer;
   TripleBuffer<ContactModel> m_contact_buffer;
   SpscRing<std::unique_ptr<Snapshot>, 256> m_snapshots;
-  std::vector<std::uint32_t> m_pending;  // changed roots not yet sent (ring full)
-  std::vector<std::uint8_t> m_pending_mark;
+  std::vector<ChunkId> m_pending;  // changed chunks not yet sent (ring full)
 
-  std::vector<std::vector<SurfaceFace>> m_render_lists;
+  std::vector<std::vector<std::vector<SurfaceFace>>> m_render_chunks;  // render consumer's copy
+  std::vector<std::vector<SurfaceFace>> m_render_lists;                // flattened (at stop)
+  SurfaceSnapshotFn m_snapshot_fn;
+  double m_snapshot_period_s = 0.0;
+  double m_snapshot_end_s = 0.0;
+  std::size_t m_next_snapshot = 0;
   std::atomic<bool> m_stop{false};
   std::atomic<bool> m_collision_done{false};
   std::atomic<bool> m_finished{false};
