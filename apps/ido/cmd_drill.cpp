@@ -7,10 +7,8 @@
 #include <fmt/format.h>
 
 #include <cmath>
-#include <cstdio>
 #include <filesystem>
 #include <optional>
-#include <regex>
 #include <utility>
 #include <vector>
 
@@ -18,6 +16,7 @@
 
 #include "cli_util.h"
 #include "command.h"
+#include "snapshots.h"
 #include "drill_report.h"
 #include "ido/core/error.h"
 #include "ido/drill/boundary_surface.h"
@@ -55,32 +54,6 @@ struct DrillOptions {
 /// The most pictures one run may ask for.
 constexpr double kMaxSnapshots = 2000;
 
-/// "WxH" in pixels (1..4096 each). @throws ido::InvalidInput naming --snapshot-size.
-std::pair<int, int> parse_snapshot_size(const std::string& text) {
-  int w = 0, h = 0;
-  char x = 0, extra = 0;
-  if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || x != 'x' || w < 1 || h < 1 || w > 4096 || h > 4096) {
-    throw InvalidInput(fmt::format("--snapshot-size must be WIDTHxHEIGHT with 1..4096 pixels each, got '{}'", text));
-  }
-  return {w, h};
-}
-
-/// Creates @p dir (or checks it is a writable folder) and removes the snapshot_NNNN.png files
-/// of an earlier run. @throws ido::InvalidInput naming --snapshots.
-void prepare_snapshot_dir(const std::filesystem::path& dir) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  if (fs::exists(dir, ec) && !fs::is_directory(dir, ec)) {
-    throw InvalidInput(fmt::format("--snapshots {}: exists and is not a folder", dir.string()));
-  }
-  fs::create_directories(dir, ec);
-  if (ec) throw InvalidInput(fmt::format("--snapshots {}: cannot create the folder ({})", dir.string(), ec.message()));
-  static const std::regex kName("snapshot_[0-9]{4}\\.png");
-  for (const auto& e : fs::directory_iterator(dir, ec)) {
-    if (e.is_regular_file() && std::regex_match(e.path().filename().string(), kName)) fs::remove(e.path(), ec);
-  }
-}
-
 void run(const DrillOptions& o, const GlobalOptions& /*g*/) {
   if (!io::is_tet_mesh_path(o.output)) throw InvalidInput(fmt::format("{}: -o must be a .vtu (or .msh, .node) file", o.output));
   if (!o.surface.empty() && !io::is_triangle_mesh_path(o.surface)) {
@@ -98,12 +71,16 @@ void run(const DrillOptions& o, const GlobalOptions& /*g*/) {
   so.erosion.min_size_mm = o.min_size_mm;
   so.coupling.stiffness_n_per_mm = o.stiffness;
   if (o.visit_budget >= 0) so.erosion.max_node_visits = static_cast<std::size_t>(o.visit_budget);
-  std::pair<int, int> picture{0, 0};
+  SnapshotOptions picture;  // one camera for every picture, looking down at 50°
+  picture.azimuth_deg = 30.0;
+  picture.elevation_deg = 50.0;
   if (!o.snapshots.empty()) {
     if (!(o.snapshot_every_s > 0.0) || !std::isfinite(o.snapshot_every_s)) {
       throw InvalidInput(fmt::format("--snapshot-every must be a positive number of seconds, got {}", o.snapshot_every_s));
     }
-    picture = parse_snapshot_size(o.snapshot_size);
+    const auto [w, h] = parse_picture_size(o.snapshot_size, "--snapshot-size");
+    picture.width_px = w;
+    picture.height_px = h;
   }
   auto device = drill::ScriptedTrajectory::load_csv(o.path);
   if (!o.snapshots.empty() && device.duration() / o.snapshot_every_s > kMaxSnapshots) {
@@ -114,7 +91,8 @@ void run(const DrillOptions& o, const GlobalOptions& /*g*/) {
   drill::TetHierarchy hierarchy(mesh);
   if (!o.density_from.empty()) drill::assign_density_from_ct(hierarchy, io::read_volume(o.density_from));
   const double before = hierarchy.material_volume();
-  if (!o.snapshots.empty()) prepare_snapshot_dir(o.snapshots);
+  std::optional<SnapshotWriter> writer;
+  if (!o.snapshots.empty()) writer.emplace(o.snapshots, picture);
 
   drill::Simulator sim(hierarchy, device, so);
   // The render consumer hands over copies of its v_lists at the picture times; they are
@@ -129,19 +107,13 @@ void run(const DrillOptions& o, const GlobalOptions& /*g*/) {
   io::write_tet_mesh(o.output, drill::full_leaf_mesh(hierarchy));
   const auto surface = drill::assemble_surface(sim.render_v_lists(), hierarchy.vertices());
   if (!o.surface.empty()) io::write_triangle_mesh(o.surface, surface);
-  nlohmann::json files = nlohmann::json::array();
-  if (!o.snapshots.empty()) {
-    // One camera for every picture, fitted to the intact mesh, looking down at 50°.
-    std::optional<viz::Camera> camera;
-    for (std::size_t k = 0; k < shots.size(); ++k) {
-      viz::Renderer ren(picture.first, picture.second);
-      ren.add_surface(drill::assemble_surface(shots[k].second, hierarchy.vertices()), Vec3(0.9, 0.85, 0.7),
+  if (writer) {
+    // The camera is fixed by the first picture (the intact mesh) and kept for the rest.
+    for (const auto& shot : shots) {
+      viz::Renderer ren(picture.width_px, picture.height_px);
+      ren.add_surface(drill::assemble_surface(shot.second, hierarchy.vertices()), Vec3(0.9, 0.85, 0.7),
                       {.shading = viz::Shading::Flat});
-      if (!camera) camera = ren.fit_camera(30.0, 50.0);
-      ren.set_camera(*camera);
-      const auto path = std::filesystem::path(o.snapshots) / fmt::format("snapshot_{:04d}.png", k);
-      ren.write_png(path);
-      files.push_back(path.string());
+      (void)writer->write(ren);
     }
   }
   if (!o.report.empty()) {
@@ -149,7 +121,7 @@ void run(const DrillOptions& o, const GlobalOptions& /*g*/) {
     r["mesh"] = o.mesh;
     r["surface_triangles"] = surface.triangles.size();
     if (!o.snapshots.empty()) {
-      r["snapshots"] = files;
+      r["snapshots"] = writer->files_json();
       r["snapshot_period_s"] = o.snapshot_every_s;
       nlohmann::json times = nlohmann::json::array();
       for (const auto& s : shots) times.push_back(s.first);

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "command.h"
+#include "snapshots.h"
 #include "cli_util.h"
 #include "ido/core/error.h"
 #include "ido/io/mesh_io.h"
@@ -53,25 +54,6 @@ std::array<double, 2> parse_pair(const std::string& text, const std::string& wha
   return out;
 }
 
-std::array<int, 2> parse_size(const std::string& text) {
-  const auto x = text.find('x');
-  int w = 0, h = 0;
-  try {
-    std::size_t used = 0;
-    if (x == std::string::npos) throw InvalidInput("");
-    w = std::stoi(text.substr(0, x), &used);
-    if (used != x) throw InvalidInput("");
-    const std::string rest = text.substr(x + 1);
-    h = std::stoi(rest, &used);
-    if (used != rest.size()) throw InvalidInput("");
-  } catch (const std::exception&) {
-    throw InvalidInput("--size must be WIDTHxHEIGHT in pixels, e.g. 800x600, got '" + text + "'");
-  }
-  if (w < 1 || h < 1 || w > 16384 || h > 16384)
-    throw InvalidInput("--size must be within 1..16384 pixels per side, got '" + text + "'");
-  return {w, h};
-}
-
 /// "AXIS:INDEX" with AXIS one of i/j/k, x/y/z or 0/1/2 (voxel index axes).
 std::pair<int, std::int64_t> parse_slice(const std::string& text) {
   const auto colon = text.find(':');
@@ -108,7 +90,7 @@ viz::ClipPlane parse_clip(const std::string& text) {
 }
 
 void run(const RenderOptions& o, const GlobalOptions& g) {
-  const auto [w, h] = parse_size(o.size);
+  const auto [w, h] = cli::parse_picture_size(o.size, "--size");
   viz::Renderer ren(w, h);
   std::optional<std::array<double, 2>> camera;
   if (!o.camera.empty()) camera = parse_pair(o.camera, "--camera (azimuth,elevation in degrees)");

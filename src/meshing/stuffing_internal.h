@@ -213,6 +213,32 @@ struct Stuffer {
   }
 };
 
+/// The output mesh of a stuffing pass: the nodes the per-block tetrahedra use, renumbered in
+/// node order, and the tetrahedra block by block. @p node_position maps a node id to mm.
+template <class NodePosition>
+[[nodiscard]] geometry::TetMesh compact_tets(const std::vector<std::vector<Tet>>& block_tets,
+                                             std::size_t nnodes, NodePosition&& node_position) {
+  std::vector<Id> remap(nnodes, -1);
+  std::size_t ntets = 0;
+  for (const auto& b : block_tets) {
+    ntets += b.size();
+    for (const Tet& t : b)
+      for (Id x : t) remap[std::size_t(x)] = 0;
+  }
+  geometry::TetMesh mesh;
+  for (std::size_t n = 0; n < nnodes; ++n) {
+    if (remap[n] < 0) continue;
+    remap[n] = Id(mesh.vertices.size());
+    mesh.vertices.push_back(node_position(Id(n)));
+  }
+  mesh.tets.reserve(ntets);
+  for (const auto& b : block_tets)
+    for (const Tet& t : b)
+      mesh.tets.push_back({remap[std::size_t(t[0])], remap[std::size_t(t[1])],
+                           remap[std::size_t(t[2])], remap[std::size_t(t[3])]});
+  return mesh;
+}
+
 /// Graded isosurface stuffing (tetrahedralize_graded.cpp): @p field is finite, at least
 /// 2 voxels along every axis, and @p h > 0 is the finest lattice spacing (mm).
 [[nodiscard]] geometry::TetMesh tetrahedralize_graded(const image::Volume<float>& field, double h,

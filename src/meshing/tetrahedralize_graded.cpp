@@ -471,25 +471,8 @@ geometry::TetMesh tetrahedralize_graded(const image::Volume<float>& field_volume
 
     // 4. compact: keep the nodes the tetrahedra use, in node order
     report(progress, 0.9, "tetrahedralize: output");
-    const std::size_t nnodes = nv + cut_ends.size();
-    std::vector<Id> remap(nnodes, -1);
-    std::size_t ntets = 0;
-    for (const auto& b : block_tets) {
-      ntets += b.size();
-      for (const Tet& t : b)
-        for (Id x : t) remap[std::size_t(x)] = 0;
-    }
-    geometry::TetMesh mesh;
-    for (std::size_t n = 0; n < nnodes; ++n) {
-      if (remap[n] < 0) continue;
-      remap[n] = Id(mesh.vertices.size());
-      mesh.vertices.push_back(final_view.node_position(Id(n)));
-    }
-    mesh.tets.reserve(ntets);
-    for (const auto& b : block_tets)
-      for (const Tet& t : b)
-        mesh.tets.push_back({remap[std::size_t(t[0])], remap[std::size_t(t[1])],
-                             remap[std::size_t(t[2])], remap[std::size_t(t[3])]});
+    geometry::TetMesh mesh = compact_tets(block_tets, nv + cut_ends.size(),
+                                          [&](Id n) { return final_view.node_position(n); });
     report(progress, 1.0, "tetrahedralize: done");
     return mesh;
   }

@@ -2,7 +2,6 @@
 // `--snapshots DIR` on `ido segment` and `ido simulate`: pictures of the evolution, and the
 // stepping equivalence the segment pictures rely on (Balloon::step() × k, then run(), gives
 // the same surface as a plain run).
-#include <png.h>
 
 #include <algorithm>
 #include <cmath>
@@ -18,38 +17,13 @@
 
 #include "ido/io/volume_io.h"
 #include "ido/segment/balloon.h"
+#include "support/png_read.h"
 #include "support/test_support.h"
 
 namespace ido {
 namespace {
 
 namespace fs = std::filesystem;
-
-struct Png {
-  int w = 0, h = 0;
-  std::vector<std::uint8_t> rgba;
-  [[nodiscard]] const std::uint8_t* at(int x, int y) const {
-    return rgba.data() + 4 * (std::size_t(y) * std::size_t(w) + std::size_t(x));
-  }
-  [[nodiscard]] bool background(int x, int y) const {
-    const auto* p = at(x, y);
-    return p[0] == 255 && p[1] == 255 && p[2] == 255;
-  }
-};
-
-/// Reads a PNG with libpng; w = h = 0 when the file is not a valid PNG.
-Png read_png(const fs::path& path) {
-  png_image img{};
-  img.version = PNG_IMAGE_VERSION;
-  Png out;
-  if (!png_image_begin_read_from_file(&img, path.c_str())) return out;
-  img.format = PNG_FORMAT_RGBA;
-  out.rgba.resize(PNG_IMAGE_SIZE(img));
-  if (!png_image_finish_read(&img, nullptr, out.rgba.data(), 0, nullptr)) return {};
-  out.w = int(img.width);
-  out.h = int(img.height);
-  return out;
-}
 
 nlohmann::json read_json(const fs::path& path) {
   std::ifstream in(path);
@@ -69,7 +43,7 @@ image::Volume<float> sphere_ct() {
 }
 
 /// Non-background pixels with x in [x0, x1).
-int covered(const Png& png, int x0, int x1) {
+int covered(const test::Png& png, int x0, int x1) {
   int n = 0;
   for (int y = 0; y < png.h; ++y)
     for (int x = x0; x < x1; ++x) n += png.background(x, y) ? 0 : 1;
@@ -154,7 +128,7 @@ TEST(SegmentSnapshots, PicturesOfTheInflatingBalloon) {
     const fs::path f = files[i].get<std::string>();
     EXPECT_EQ(f.filename().string(), fmt::format("snapshot_{:04d}.png", i));
     EXPECT_EQ(steps[i].get<std::int64_t>(), i + 1 < files.size() ? std::int64_t(every * (i + 1)) : inflation + 30);
-    const Png png = read_png(f);
+    const test::Png png = test::read_png(f);
     ASSERT_EQ(png.w, 240) << f;
     ASSERT_EQ(png.h, 120) << f;
     area.push_back(covered(png, 0, 120));  // left panel: the surface on white
@@ -193,7 +167,7 @@ TEST(SegmentSnapshots, DefaultCadenceGivesFifteenToThirtyPictures) {
   const std::int64_t every = steps[0];
   for (std::size_t i = 0; i + 1 < steps.size(); ++i) EXPECT_EQ(steps[i].get<std::int64_t>(), every * std::int64_t(i + 1));
   EXPECT_EQ(std::int64_t(steps.size() - 1), inflation / every);
-  for (const auto& f : rep.at("snapshots")) EXPECT_EQ(read_png(f.get<std::string>()).w, 80);
+  for (const auto& f : rep.at("snapshots")) EXPECT_EQ(test::read_png(f.get<std::string>()).w, 80);
 }
 
 // ---- ido simulate --snapshots -------------------------------------------------------------
@@ -216,7 +190,7 @@ std::string cantilever_scene(int steps, int output_every) {
 }
 
 /// Centroid row (pixels from the top) of the non-background pixels.
-double centroid_row(const Png& png) {
+double centroid_row(const test::Png& png) {
   double sum = 0;
   int n = 0;
   for (int y = 0; y < png.h; ++y)
@@ -245,9 +219,9 @@ TEST(SimulateSnapshots, FallingCantileverMovesDownInThePictures) {
     EXPECT_EQ(rep.at("snapshot_frames"), nlohmann::json({0, 3, 6, 9, 10}));
     const auto files = rep.at("snapshots");
     ASSERT_EQ(files.size(), 5u);
-    std::vector<Png> pngs;
+    std::vector<test::Png> pngs;
     for (const auto& f : files) {
-      pngs.push_back(read_png(f.get<std::string>()));
+      pngs.push_back(test::read_png(f.get<std::string>()));
       ASSERT_EQ(pngs.back().w, 200);
       ASSERT_EQ(pngs.back().h, 150);
     }

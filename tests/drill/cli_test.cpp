@@ -1,6 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
 // `ido tetmesh` and `ido drill` end to end.
-#include <png.h>
 
 #include <cstdio>
 #include <fstream>
@@ -11,6 +10,7 @@
 
 #include "ido/drill/tet_hierarchy.h"
 #include "ido/io/mesh_io.h"
+#include "support/png_read.h"
 #include "support/test_support.h"
 
 namespace ido::drill {
@@ -49,19 +49,6 @@ TEST(DrillCli, TetmeshThenDrillWritesConsistentOutputs) {
   ASSERT_TRUE(out.cell_fields.count("density"));
   EXPECT_EQ(out.cell_fields.at("depth").count(), out.tets.size());
   EXPECT_GT(io::read_triangle_mesh(dir / "out.stl").triangles.size(), 12U);
-}
-
-// RGBA pixels of a PNG (libpng's simplified API); empty when it is not a readable PNG.
-std::vector<std::uint8_t> read_png_rgba(const std::filesystem::path& path, int& width, int& height) {
-  png_image image{};
-  image.version = PNG_IMAGE_VERSION;
-  if (!png_image_begin_read_from_file(&image, path.string().c_str())) return {};
-  image.format = PNG_FORMAT_RGBA;
-  std::vector<std::uint8_t> px(PNG_IMAGE_SIZE(image));
-  if (!png_image_finish_read(&image, nullptr, px.data(), 0, nullptr)) return {};
-  width = static_cast<int>(image.width);
-  height = static_cast<int>(image.height);
-  return px;
 }
 
 std::size_t differing_pixels(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b) {
@@ -105,10 +92,10 @@ TEST(DrillCli, SnapshotsShowTheSurfaceAsItIsDrilled) {
     char magic[8] = {};
     f.read(magic, 8);
     ASSERT_EQ(std::string(magic, 8), std::string("\x89PNG\r\n\x1a\n", 8)) << p;
-    int w = 0, h = 0;
-    pictures.push_back(read_png_rgba(p, w, h));
-    ASSERT_EQ(w, 160);
-    ASSERT_EQ(h, 120);
+    test::Png png = test::read_png(p);
+    ASSERT_EQ(png.w, 160);
+    ASSERT_EQ(png.h, 120);
+    pictures.push_back(std::move(png.rgba));
   }
   // Before the burr touches (t = 0, 0.1, 0.2 s) nothing changes: identical pictures.
   EXPECT_EQ(differing_pixels(pictures[0], pictures[1]), 0U);

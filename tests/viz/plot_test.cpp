@@ -3,7 +3,6 @@
 // data says, the axes cover the data, bad input is refused with a clear message.
 #include "ido/viz/plot.h"
 
-#include <png.h>
 
 #include <algorithm>
 #include <cmath>
@@ -15,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include "ido/core/error.h"
+#include "support/png_read.h"
 #include "support/test_support.h"
 
 namespace ido::viz {
@@ -204,15 +204,10 @@ TEST(Plot, WrittenPngIsThePlottedImage) {
   const PlotOptions o = sized(320, 200, "Energy");
   write_line_plot(dir / "p.png", std::span(&s, 1), o);
   const Image expected = plot_lines(std::span(&s, 1), o);
-  png_image img{};
-  img.version = PNG_IMAGE_VERSION;
-  ASSERT_TRUE(png_image_begin_read_from_file(&img, (dir / "p.png").c_str()));
-  img.format = PNG_FORMAT_RGBA;
-  std::vector<std::uint8_t> rgba(PNG_IMAGE_SIZE(img));
-  ASSERT_TRUE(png_image_finish_read(&img, nullptr, rgba.data(), 0, nullptr));
-  EXPECT_EQ(int(img.width), 320);
-  EXPECT_EQ(int(img.height), 200);
-  EXPECT_TRUE(rgba == expected.rgba);
+  const test::Png back = test::read_png(dir / "p.png");
+  EXPECT_EQ(back.w, 320);
+  EXPECT_EQ(back.h, 200);
+  EXPECT_TRUE(back.rgba == expected.rgba);
 }
 
 }  // namespace

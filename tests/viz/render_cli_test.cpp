@@ -1,6 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
 // `ido render` end to end: the built tool reads files and writes a PNG.
-#include <png.h>
 
 #include <cmath>
 #include <filesystem>
@@ -13,28 +12,11 @@
 #include "ido/geometry/primitives.h"
 #include "ido/io/mesh_io.h"
 #include "ido/io/volume_io.h"
+#include "support/png_read.h"
 #include "support/test_support.h"
 
 namespace ido {
 namespace {
-
-struct Png {
-  int w = 0, h = 0;
-  std::vector<std::uint8_t> rgba;
-};
-
-Png read_png(const std::filesystem::path& path) {
-  png_image img{};
-  img.version = PNG_IMAGE_VERSION;
-  Png out;
-  if (!png_image_begin_read_from_file(&img, path.c_str())) return out;
-  img.format = PNG_FORMAT_RGBA;
-  out.rgba.resize(PNG_IMAGE_SIZE(img));
-  if (!png_image_finish_read(&img, nullptr, out.rgba.data(), 0, nullptr)) return {};
-  out.w = int(img.width);
-  out.h = int(img.height);
-  return out;
-}
 
 TEST(RenderCli, SurfaceToPng) {
   const auto dir = test::scratch_dir("render_cli_surface");
@@ -42,7 +24,7 @@ TEST(RenderCli, SurfaceToPng) {
   const auto r = test::run_tool("render " + (dir / "sphere.stl").string() + " -o " +
                                 (dir / "pic.png").string() + " --size 120x90 --camera 10,20 --ortho");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  const Png png = read_png(dir / "pic.png");
+  const test::Png png = test::read_png(dir / "pic.png");
   ASSERT_EQ(png.w, 120);
   ASSERT_EQ(png.h, 90);
   int covered = 0;
@@ -71,7 +53,7 @@ TEST(RenderCli, SliceWithOverlay) {
                                 (dir / "slice.png").string() + " --slice k:5 --size 32x24 --overlay " +
                                 (dir / "mask.nii.gz").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  const Png png = read_png(dir / "slice.png");
+  const test::Png png = test::read_png(dir / "slice.png");
   ASSERT_EQ(png.w, 32);
   int contour = 0;
   for (std::size_t i = 0; i < png.rgba.size(); i += 4) {

@@ -1,7 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "ido/viz/renderer.h"
 
-#include <png.h>
 
 #include <cmath>
 #include <cstdio>
@@ -12,6 +11,7 @@
 
 #include "ido/core/error.h"
 #include "ido/geometry/primitives.h"
+#include "support/png_read.h"
 #include "support/test_support.h"
 
 namespace ido::viz {
@@ -243,29 +243,16 @@ TEST(Renderer, ClipRemovesTheFarSide) {
   EXPECT_TRUE(test::near(lo.x(), 0.0, 1e-12));
 }
 
-std::vector<std::uint8_t> read_png_rgba(const std::filesystem::path& path, int& w, int& h) {
-  png_image img{};
-  img.version = PNG_IMAGE_VERSION;
-  if (!png_image_begin_read_from_file(&img, path.c_str())) return {};
-  img.format = PNG_FORMAT_RGBA;
-  std::vector<std::uint8_t> buf(PNG_IMAGE_SIZE(img));
-  if (!png_image_finish_read(&img, nullptr, buf.data(), 0, nullptr)) return {};
-  w = int(img.width);
-  h = int(img.height);
-  return buf;
-}
-
 TEST(Renderer, PngRoundTrip) {
   Renderer ren(64, 48);
   ren.add_surface(geometry::icosphere(Vec3::Zero(), 3, 2), Vec3(0.9, 0.6, 0.1));
   const Image im = ren.render();
   const auto path = test::scratch_dir("viz_png") / "sphere.png";
   write_png(path, im);
-  int w = 0, h = 0;
-  const auto back = read_png_rgba(path, w, h);
-  EXPECT_EQ(w, 64);
-  EXPECT_EQ(h, 48);
-  EXPECT_EQ(back, im.rgba);
+  const test::Png back = test::read_png(path);
+  EXPECT_EQ(back.w, 64);
+  EXPECT_EQ(back.h, 48);
+  EXPECT_EQ(back.rgba, im.rgba);
 }
 
 TEST(Renderer, BadInputThrows) {
