@@ -17,6 +17,7 @@
 
 #include "cli_util.h"
 #include "command.h"
+#include "energy_plot.h"
 #include "drill_report.h"
 #include "ido/core/error.h"
 #include "ido/core/log.h"
@@ -35,7 +36,6 @@
 #include "ido/meshing/tetrahedralize.h"
 #include "ido/segment/balloon.h"
 #include "ido/segment/metrics.h"
-#include "ido/viz/plot.h"
 #include "ido/viz/renderer.h"
 
 namespace ido::cli {
@@ -233,14 +233,7 @@ json run_deformation(const geometry::TetMesh& mesh, const fs::path& dir, int ste
   write_text_file((sim_dir / "scene.json").string(), scene.dump(2) + "\n");
   auto loaded = io::load_scene(sim_dir / "scene.json");
   const auto result = io::run_scene(loaded, sim_dir, progress);
-  const std::vector<viz::PlotSeries> series = {
-      {"kinetic", result.time_s, result.kinetic_mj, {}},
-      {"elastic", result.time_s, result.elastic_mj, {}},
-      {"gravitational", result.time_s, result.gravitational_mj, {}},
-      {"total", result.time_s, result.total_mj, {}}};
-  viz::write_line_plot(sim_dir / "energy.png", series,
-                       {.width_px = 900, .height_px = 540, .title = "Energy", .x_label = "time (s)",
-                        .y_label = "energy (mJ)"});
+  write_energy_plot(sim_dir / "energy.png", result);
   pictures.push_back({{"file", "deformation/energy.png"}, {"what", "energy of the deforming vessel over time"}});
   std::vector<double> ms = result.step_ms;
   std::sort(ms.begin(), ms.end());

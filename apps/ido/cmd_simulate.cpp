@@ -18,10 +18,10 @@
 
 #include "cli_util.h"
 #include "command.h"
+#include "energy_plot.h"
 #include "ido/core/error.h"
 #include "ido/io/mesh_io.h"
 #include "ido/io/scene.h"
-#include "ido/viz/plot.h"
 #include "ido/viz/renderer.h"
 #include "snapshots.h"
 
@@ -128,15 +128,7 @@ void run(const Options& o, const GlobalOptions& g) {
   auto scene = io::load_scene(o.scene);
   auto progress = make_progress(g.quiet);
   const auto result = io::run_scene(scene, o.out_dir, progress.get());
-  const std::vector<viz::PlotSeries> series = {
-      {"kinetic", result.time_s, result.kinetic_mj, {}},
-      {"elastic", result.time_s, result.elastic_mj, {}},
-      {"gravitational", result.time_s, result.gravitational_mj, {}},
-      {"total", result.time_s, result.total_mj, {}},
-  };
-  viz::write_line_plot(std::filesystem::path(o.out_dir) / "energy.png", series,
-                       {.width_px = 900, .height_px = 540, .title = "Energy",
-                        .x_label = "time (s)", .y_label = "energy (mJ)"});
+  write_energy_plot(std::filesystem::path(o.out_dir) / "energy.png", result);
   std::size_t pictures = 0;
   if (!o.snapshots.empty()) {
     const nlohmann::json snap = write_snapshots(o, result.frames, progress.get());

@@ -10,15 +10,9 @@
 
 namespace ido::image {
 using test::near;
+using test::rotation;
 using test::rel_near;
 
-namespace {
-Mat3 rotation(double ax, double ay, double az) {
-  return (Eigen::AngleAxisd(az, Vec3::UnitZ()) * Eigen::AngleAxisd(ay, Vec3::UnitY()) *
-          Eigen::AngleAxisd(ax, Vec3::UnitX()))
-      .toRotationMatrix();
-}
-}  // namespace
 
 TEST(GaussianSmooth, ConstantStaysConstant) {
   Volume<float> v({17, 12, 9}, Vec3(0.7, 1.3, 2.1), Vec3::Zero(), Mat3::Identity(), 42.5f);

@@ -10,13 +10,9 @@
 
 namespace ido::image {
 using test::near;
+using test::rotation;
 
 namespace {
-Mat3 rotation(double ax, double ay, double az) {
-  return (Eigen::AngleAxisd(az, Vec3::UnitZ()) * Eigen::AngleAxisd(ay, Vec3::UnitY()) *
-          Eigen::AngleAxisd(ax, Vec3::UnitX()))
-      .toRotationMatrix();
-}
 double linear(const Vec3& w) { return 5.0 + 1.5 * w.x() - 0.5 * w.y() + 0.25 * w.z(); }
 }  // namespace
 

@@ -9,14 +9,8 @@
 
 namespace ido::image {
 using test::near;
+using test::rotation;
 
-namespace {
-Mat3 rotation(double ax, double ay, double az) {
-  return (Eigen::AngleAxisd(az, Vec3::UnitZ()) * Eigen::AngleAxisd(ay, Vec3::UnitY()) *
-          Eigen::AngleAxisd(ax, Vec3::UnitX()))
-      .toRotationMatrix();
-}
-}  // namespace
 
 TEST(Volume, IndexToWorldFollowsItkFormula) {
   const Mat3 d = rotation(0.3, -0.2, 1.1);

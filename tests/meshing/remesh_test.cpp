@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "ido/core/error.h"
+#include "support/octahedron_sphere.h"
 #include "support/test_support.h"
 
 namespace ido::meshing {
@@ -15,30 +16,7 @@ namespace {
 
 // Subdivided octahedron projected onto a sphere (test-local, independent of the library).
 geometry::TriangleMesh sphere(double r, int subdivisions) {
-  geometry::TriangleMesh m;
-  m.vertices = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-  m.triangles = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4}, {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
-  for (int s = 0; s < subdivisions; ++s) {
-    std::map<std::pair<int, int>, int> mid;
-    auto midpoint = [&](int a, int b) {
-      auto key = std::minmax(a, b);
-      auto it = mid.find(key);
-      if (it != mid.end()) return it->second;
-      m.vertices.push_back((m.vertices[a] + m.vertices[b]).normalized());
-      return mid[key] = int(m.vertices.size()) - 1;
-    };
-    std::vector<Tri> g;
-    for (const Tri& t : m.triangles) {
-      int a = midpoint(t[0], t[1]), b = midpoint(t[1], t[2]), c = midpoint(t[2], t[0]);
-      g.push_back({t[0], a, c});
-      g.push_back({t[1], b, a});
-      g.push_back({t[2], c, b});
-      g.push_back({a, b, c});
-    }
-    m.triangles = g;
-  }
-  for (auto& v : m.vertices) v = v.normalized() * r;
-  return m;
+  return test::octahedron_sphere(Vec3::Zero(), r, subdivisions);
 }
 
 // Torus of radii R, r sampled on an nu × nv grid (genus 1, outward).

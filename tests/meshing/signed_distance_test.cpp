@@ -9,36 +9,14 @@
 
 #include "ido/core/error.h"
 #include "ido/geometry/winding_number.h"
+#include "support/octahedron_sphere.h"
 #include "support/test_support.h"
 
 namespace ido::meshing {
 namespace {
 
 geometry::TriangleMesh sphere(const Vec3& c, double r, int subdivisions) {
-  geometry::TriangleMesh m;
-  m.vertices = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-  m.triangles = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4}, {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
-  for (int s = 0; s < subdivisions; ++s) {
-    std::map<std::pair<int, int>, int> mid;
-    auto midpoint = [&](int a, int b) {
-      auto key = std::minmax(a, b);
-      auto it = mid.find(key);
-      if (it != mid.end()) return it->second;
-      m.vertices.push_back((m.vertices[a] + m.vertices[b]).normalized());
-      return mid[key] = int(m.vertices.size()) - 1;
-    };
-    std::vector<Tri> g;
-    for (const Tri& t : m.triangles) {
-      int a = midpoint(t[0], t[1]), b = midpoint(t[1], t[2]), cc = midpoint(t[2], t[0]);
-      g.push_back({t[0], a, cc});
-      g.push_back({t[1], b, a});
-      g.push_back({t[2], cc, b});
-      g.push_back({a, b, cc});
-    }
-    m.triangles = g;
-  }
-  for (auto& v : m.vertices) v = c + v.normalized() * r;
-  return m;
+  return test::octahedron_sphere(c, r, subdivisions);
 }
 
 TEST(ClosestPointOnTriangle, MatchesDenseSampling) {

@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include "ido/core/math.h"
+
 namespace ido::test {
 
 /// The project's source folder.
@@ -29,6 +31,13 @@ struct CommandResult {
 };
 /// Runs `ido ARGS` (arguments already shell-quoted as needed) and captures its output.
 CommandResult run_tool(const std::string& args);
+
+/// Rotation by @p ax about x, then @p ay about y, then @p az about z (radians).
+inline Mat3 rotation(double ax, double ay, double az) {
+  return (Eigen::AngleAxisd(az, Vec3::UnitZ()) * Eigen::AngleAxisd(ay, Vec3::UnitY()) *
+          Eigen::AngleAxisd(ax, Vec3::UnitX()))
+      .toRotationMatrix();
+}
 
 /// |a − b| ≤ tol, with a readable failure message.
 inline ::testing::AssertionResult near(double a, double b, double tol) {
