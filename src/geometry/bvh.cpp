@@ -88,10 +88,7 @@ BvhTree build_bvh(const std::vector<Aabb>& boxes, const std::vector<Vec3>& centr
   return tree;
 }
 
-}  // namespace detail
-
-TriangleBvh::TriangleBvh(const TriangleMesh& mesh, int leaf_size) {
-  validate_mesh(mesh);
+BvhTree build_triangle_bvh(const TriangleMesh& mesh, int leaf_size) {
   const std::size_t nt = mesh.triangles.size();
   std::vector<Aabb> boxes(nt);
   std::vector<Vec3> centroids(nt);
@@ -103,7 +100,15 @@ TriangleBvh::TriangleBvh(const TriangleMesh& mesh, int leaf_size) {
     boxes[t] = Aabb::of_triangle(a, b, c);
     centroids[t] = (a + b + c) / 3.0;
   }
-  detail::BvhTree tree = detail::build_bvh(boxes, centroids, leaf_size);
+  return build_bvh(boxes, centroids, leaf_size);
+}
+
+}  // namespace detail
+
+TriangleBvh::TriangleBvh(const TriangleMesh& mesh, int leaf_size) {
+  validate_mesh(mesh);
+  const std::size_t nt = mesh.triangles.size();
+  detail::BvhTree tree = detail::build_triangle_bvh(mesh, leaf_size);
   m_nodes.reserve(tree.nodes.size());
   for (const auto& n : tree.nodes) m_nodes.push_back({n.box, n.first, n.count});
   m_triangle_id = std::move(tree.order);
@@ -117,7 +122,7 @@ TriangleBvh::TriangleBvh(const TriangleMesh& mesh, int leaf_size) {
     m_corners[s] = {mesh.vertices[static_cast<std::size_t>(tri[0])],
                     mesh.vertices[static_cast<std::size_t>(tri[1])],
                     mesh.vertices[static_cast<std::size_t>(tri[2])]};
-    m_boxes[s] = boxes[t];
+    m_boxes[s] = Aabb::of_triangle(m_corners[s][0], m_corners[s][1], m_corners[s][2]);
   }
 }
 

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "ido/geometry/aabb.h"
+#include "ido/geometry/triangle_mesh.h"
 
 namespace ido::geometry::detail {
 
@@ -28,5 +29,8 @@ struct BvhTree {
 /// O(n log n).
 BvhTree build_bvh(const std::vector<Aabb>& boxes, const std::vector<Vec3>& centroids,
                   int leaf_size);
+
+/// build_bvh() over the triangles of @p mesh (item id = triangle index), boxed tightly.
+BvhTree build_triangle_bvh(const TriangleMesh& mesh, int leaf_size);
 
 }  // namespace ido::geometry::detail

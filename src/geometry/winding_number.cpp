@@ -26,17 +26,7 @@ WindingNumber::WindingNumber(const TriangleMesh& mesh, const WindingNumberOption
     : m_beta(options.beta) {
   validate_mesh(mesh);
   const std::size_t nt = mesh.triangles.size();
-  std::vector<Aabb> boxes(nt);
-  std::vector<Vec3> centroids(nt);
-  for (std::size_t t = 0; t < nt; ++t) {
-    const Tri& tri = mesh.triangles[t];
-    const Vec3& a = mesh.vertices[static_cast<std::size_t>(tri[0])];
-    const Vec3& b = mesh.vertices[static_cast<std::size_t>(tri[1])];
-    const Vec3& c = mesh.vertices[static_cast<std::size_t>(tri[2])];
-    boxes[t] = Aabb::of_triangle(a, b, c);
-    centroids[t] = (a + b + c) / 3.0;
-  }
-  const detail::BvhTree tree = detail::build_bvh(boxes, centroids, options.leaf_size);
+  const detail::BvhTree tree = detail::build_triangle_bvh(mesh, options.leaf_size);
   m_corners.resize(nt);
   for (std::size_t s = 0; s < nt; ++s) {
     const Tri& tri = mesh.triangles[static_cast<std::size_t>(tree.order[s])];
