@@ -102,6 +102,22 @@ struct Balloon::State {
   std::int64_t frozen_pending = 0;
   bool background_decided = false;
   int background_side = 0;  // see first_transition_limit
+  // The thin-layer wall model of the edge stage: fitters for blur σ = plateau_sigma0 +
+  // q · plateau_dsigma (mm), q = 0, 1, ...; the blur along a normal picks one (plateau_for).
+  std::vector<PlateauProfileFitter> plateau;
+  double plateau_sigma0 = 0, plateau_dsigma = 1;
+  Vec3 scanner_blur2_mm2 = Vec3::Zero();  // scanner blur variance along each grid axis (mm²)
+  double smoothing2_mm2 = 0;              // pre-smoothing variance (mm²)
+
+  // The fitter whose σ is nearest the blur along @p normal: pre-smoothing plus the scanner's
+  // blur and the voxel's partial-volume box along each grid axis.
+  const PlateauProfileFitter* plateau_for(const Vec3& normal) const {
+    if (plateau.empty()) return nullptr;
+    const Vec3 nd = smoothed.direction().transpose() * normal;  // normal in grid axes
+    const double sigma = std::sqrt(smoothing2_mm2 + nd.cwiseAbs2().dot(scanner_blur2_mm2));
+    const auto q = std::lround((sigma - plateau_sigma0) / plateau_dsigma);
+    return &plateau[std::size_t(std::clamp<long>(q, 0, long(plateau.size()) - 1))];
+  }
 
   geometry::TriangleMesh mesh() const {
     geometry::TriangleMesh m;
@@ -209,7 +225,14 @@ struct Balloon::State {
           const double I = smoothed.sample(x[i]);
           if (edge_stage) {
             auto t = edge_offset_along_normal(smoothed, x[i], nrm, model, search, 0.2 * h, min_rise, h);
-            if (t) t = first_transition_limit(smoothed, x[i], nrm, model, search, 0.2 * h, *t, background_side);
+            if (t && model.accept_brighter) {
+              // Bone: the outer fall of a thin cortex that the blur has lowered is read by the
+              // three-plateau fit (marrow, cortex, surroundings), not at the half-way level.
+              if (const PlateauProfileFitter* f = plateau_for(nrm))
+                if (const auto w = plateau_wall_offset(smoothed, x[i], nrm, model, *f)) t = *w;
+            } else if (t) {
+              t = first_transition_limit(smoothed, x[i], nrm, model, search, 0.2 * h, *t, background_side);
+            }
             if (t) {
               // Blur (the scanner's and our pre-smoothing) moves the half-way level of a curved
               // wall inwards by about σ² H (H the mean curvature): add it back.
@@ -305,6 +328,22 @@ Balloon::Balloon(const image::Volume<float>& ct, const std::vector<Vec3>& seeds_
   m->model.tolerance = options.tolerance ? *options.tolerance : est.tolerance;
   m->model.accept_brighter = options.accept_brighter;
   if (options.edge_stop > 0) m->gradient_mm = image::gradient_magnitude(m->smoothed, options.threaded);
+  if (options.edge_refinement && options.plateau_wall) {
+    State& st = *m;
+    const double h = st.h, search = options.edge_search_voxels * h;
+    // Along grid axis a a voxel of size s_a adds the scanner's blur (scanner_blur_voxels · s_a),
+    // the partial-volume box of its own width (variance s_a² / 12) and, as the profile is read
+    // by trilinear interpolation between voxel centres, about s_a² / 6 more (the mean variance
+    // of the two-tap interpolation kernel).
+    st.smoothing2_mm2 = std::pow(options.smoothing_sigma_voxels * h, 2);
+    st.scanner_blur2_mm2 = ((std::pow(options.scanner_blur_voxels, 2) + 0.25) * ct.spacing().array().square()).matrix();
+    const double lo = std::sqrt(st.smoothing2_mm2 + st.scanner_blur2_mm2.minCoeff());
+    const double hi = std::sqrt(st.smoothing2_mm2 + st.scanner_blur2_mm2.maxCoeff());
+    st.plateau_sigma0 = std::max(lo, 0.1 * h);
+    st.plateau_dsigma = 0.05 * h;
+    for (double sg = st.plateau_sigma0; sg <= hi + 0.5 * st.plateau_dsigma; sg += st.plateau_dsigma)
+      st.plateau.emplace_back(sg, 0.2 * h, search + std::max(h, 2.0 * sg), search, 0.1 * h, 0.5 * h);
+  }
   m->report.model = m->model;
   geometry::TriangleMesh all;
   const double r0 = options.seed_radius_voxels * ct.spacing().mean();

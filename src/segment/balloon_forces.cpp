@@ -5,6 +5,8 @@
 #include <cmath>
 #include <vector>
 
+#include "ido/core/error.h"
+
 namespace ido::segment {
 
 SurfaceDifferentials surface_differentials(const std::vector<Vec3>& x, const std::vector<Tri>& triangles) {
@@ -174,6 +176,108 @@ std::optional<double> edge_offset_along_normal(const image::Volume<float>& smoot
     }
   }
   return wall;
+}
+
+PlateauProfileFitter::PlateauProfileFitter(double sigma_mm, double step_mm, double reach_mm, double search_mm,
+                                           double candidate_step_mm, double min_separation_mm) {
+  if (!(sigma_mm > 0) || !(step_mm > 0) || !(candidate_step_mm > 0) || !(search_mm > 0) ||
+      !(search_mm + 2.0 * sigma_mm <= reach_mm))
+    throw InvalidInput("plateau profile fit: need positive σ, steps and search, and search + 2σ ≤ reach");
+  m_step = step_mm;
+  m_reach = reach_mm;
+  const int half = static_cast<int>(std::floor(reach_mm / step_mm + 1e-9));
+  m_samples = static_cast<std::size_t>(2 * half + 1);
+  const int cand = static_cast<int>(std::floor(search_mm / candidate_step_mm + 1e-9));
+  for (int j = -cand; j <= cand; ++j) m_candidates.push_back(j * candidate_step_mm);
+  const std::size_t nc = m_candidates.size();
+  m_cdf.resize(nc * m_samples);
+  for (std::size_t j = 0; j < nc; ++j)
+    for (std::size_t k = 0; k < m_samples; ++k)
+      m_cdf[j * m_samples + k] = 0.5 * std::erfc(-(sample_offset_mm(k) - m_candidates[j]) / (sigma_mm * std::sqrt(2.0)));
+  const auto min_sep = static_cast<std::size_t>(std::ceil(min_separation_mm / candidate_step_mm - 1e-9));
+  for (std::size_t a = 0; a < nc; ++a)
+    for (std::size_t b = a + std::max<std::size_t>(min_sep, 1); b < nc; ++b) {
+      // Normal matrix of the basis (1 − Φa, Φa − Φb, Φb).
+      double xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
+      for (std::size_t k = 0; k < m_samples; ++k) {
+        const double pa = m_cdf[a * m_samples + k], pb = m_cdf[b * m_samples + k];
+        const double u = 1.0 - pa, v = pa - pb, w = pb;
+        xx += u * u;
+        xy += u * v;
+        xz += u * w;
+        yy += v * v;
+        yz += v * w;
+        zz += w * w;
+      }
+      const double c00 = yy * zz - yz * yz, c01 = xz * yz - xy * zz, c02 = xy * yz - xz * yy;
+      const double det = xx * c00 + xy * c01 + xz * c02;
+      const double scale = xx + yy + zz;
+      if (!(det > 1e-9 * scale * scale * scale)) continue;  // a plateau the samples cannot see
+      Pair p;
+      p.a = static_cast<int>(a);
+      p.b = static_cast<int>(b);
+      p.inv = {c00 / det, c01 / det, c02 / det, (xx * zz - xz * xz) / det, (xy * xz - xx * yz) / det,
+               (xx * yy - xy * xy) / det};
+      m_pairs.push_back(p);
+    }
+}
+
+double PlateauProfileFitter::sample_offset_mm(std::size_t k) const noexcept {
+  return -m_reach + double(k) * m_step;
+}
+
+std::optional<PlateauFit> PlateauProfileFitter::fit(const std::vector<double>& samples) const {
+  if (samples.size() != m_samples || m_pairs.empty()) return std::nullopt;
+  // S_j = Σ_k Φ((t_k − x_j)/σ) I_k; the right-hand side of every pair is made of these.
+  const std::size_t nc = m_candidates.size();
+  std::vector<double> s(nc, 0.0);
+  double total = 0, squares = 0;
+  for (std::size_t k = 0; k < m_samples; ++k) {
+    total += samples[k];
+    squares += samples[k] * samples[k];
+  }
+  for (std::size_t j = 0; j < nc; ++j) {
+    const double* row = m_cdf.data() + j * m_samples;
+    double acc = 0;
+    for (std::size_t k = 0; k < m_samples; ++k) acc += row[k] * samples[k];
+    s[j] = acc;
+  }
+  double best = INFINITY;
+  const Pair* best_pair = nullptr;
+  std::array<double, 3> best_levels{};
+  for (const Pair& p : m_pairs) {
+    const double r0 = total - s[std::size_t(p.a)], r1 = s[std::size_t(p.a)] - s[std::size_t(p.b)], r2 = s[std::size_t(p.b)];
+    const auto& q = p.inv;
+    const double c = q[0] * r0 + q[1] * r1 + q[2] * r2;
+    const double m = q[1] * r0 + q[3] * r1 + q[4] * r2;
+    const double o = q[2] * r0 + q[4] * r1 + q[5] * r2;
+    const double sse = squares - (c * r0 + m * r1 + o * r2);  // least-squares residual
+    if (sse < best) {
+      best = sse;
+      best_pair = &p;
+      best_levels = {c, m, o};
+    }
+  }
+  if (!best_pair) return std::nullopt;
+  PlateauFit f;
+  f.inner_mm = m_candidates[std::size_t(best_pair->a)];
+  f.outer_mm = m_candidates[std::size_t(best_pair->b)];
+  f.levels = best_levels;
+  f.rms_residual = std::sqrt(std::max(best, 0.0) / double(m_samples));
+  return f;
+}
+
+std::optional<double> plateau_wall_offset(const image::Volume<float>& smoothed, const Vec3& p, const Vec3& normal,
+                                          const IntensityModel& model, const PlateauProfileFitter& fitter) {
+  std::vector<double> samples(fitter.sample_count());
+  for (std::size_t k = 0; k < samples.size(); ++k) samples[k] = smoothed.sample(p + normal * fitter.sample_offset_mm(k));
+  const auto f = fitter.fit(samples);
+  if (!f) return std::nullopt;
+  auto accepted = [&](double level) { return intensity_departure(level, model) <= model.tolerance; };
+  if (!accepted(f->levels[0])) return std::nullopt;
+  if (!accepted(f->levels[1])) return f->inner_mm;
+  if (!accepted(f->levels[2])) return f->outer_mm;
+  return std::nullopt;
 }
 
 }  // namespace ido::segment

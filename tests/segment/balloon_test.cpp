@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "ido/segment/balloon.h"
 
+#include <array>
 #include <cmath>
 #include <functional>
 #include <random>
@@ -168,6 +169,62 @@ TEST(EdgeOffset, OrdinaryWallIsUnchangedAndDarkValleyIsNeverCrossed) {
   const double mirrored_limited =
       first_transition_limit(mirrored, Vec3(10.5, 1.5, 1.5), Vec3::UnitX(), dark, 2.0, 0.2, 1.8, +1);
   EXPECT_NEAR(mirrored_limited, limited, 1e-9);
+}
+
+TEST(PlateauFit, RecoversBlurredThinLayersExactly) {
+  // Profiles made exactly of the model (three plateaus blurred by the fitter's σ), with the
+  // transitions on the candidate grid: the fit returns them and the levels.
+  const double sigma = 1.0;
+  const PlateauProfileFitter fitter(sigma, 0.2, 4.0, 2.0, 0.1, 0.5);
+  auto cdf = [&](double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); };
+  const std::array<std::array<double, 5>, 3> cases = {{{0.3, 1.8, 350, 40, 1200},   // vessel, gap, bone
+                                                       {-0.5, 1.0, 250, 1200, 40},  // marrow, cortex, tissue
+                                                       {0.0, 1.0, 350, 40, 1200}}};
+  for (const auto& [a, b, c, m, o] : cases) {
+    std::vector<double> samples(fitter.sample_count());
+    for (std::size_t k = 0; k < samples.size(); ++k) {
+      const double t = fitter.sample_offset_mm(k);
+      samples[k] = c + (m - c) * cdf((t - a) / sigma) + (o - m) * cdf((t - b) / sigma);
+    }
+    const auto f = fitter.fit(samples);
+    ASSERT_TRUE(f.has_value());
+    EXPECT_TRUE(test::near(f->inner_mm, a, 1e-9)) << a;
+    EXPECT_TRUE(test::near(f->outer_mm, b, 1e-9)) << b;
+    EXPECT_TRUE(test::near(f->levels[0], c, 1e-6 * 1200));
+    EXPECT_TRUE(test::near(f->levels[1], m, 1e-6 * 1200));
+    EXPECT_TRUE(test::near(f->levels[2], o, 1e-6 * 1200));
+    EXPECT_LT(f->rms_residual, 1e-3);
+  }
+  EXPECT_FALSE(fitter.fit(std::vector<double>(3, 0.0)).has_value());
+  EXPECT_THROW(PlateauProfileFitter(1.0, 0.2, 3.0, 2.0, 0.1, 0.5), InvalidInput);  // reach < search + 2σ
+}
+
+TEST(PlateauFit, ThinCortexWallIsItsOuterEdgeNotTheHalfWayLevel) {
+  // Bone: marrow (250) up to x = 8.5, a 1.5-voxel cortex (1200) up to x = 10, soft tissue (40)
+  // beyond, blurred by σ = 1 voxel. The blur lowers the cortex's peak to about 720, so the
+  // half-way level between the profile's extremes (≈ 380, what edge_offset_along_normal reads)
+  // lies about half a voxel outside the true wall; the plateau fit reads the wall at x = 10.
+  const auto v = blurred_layers({8.5, 10.0}, {250, 1200, 40}, 1.0);
+  IntensityModel bone{250, 100};
+  bone.accept_brighter = true;
+  const PlateauProfileFitter fitter(std::sqrt(1.0 + 1.0 / 6.0), 0.2, 4.4, 2.0, 0.1, 0.5);
+  for (double x0 : {9.2, 10.0, 10.7}) {
+    const auto half_way = edge_offset_along_normal(v, Vec3(x0, 1.5, 1.5), Vec3::UnitX(), bone, 2.0, 0.2, 25.0, 1.0);
+    ASSERT_TRUE(half_way.has_value());
+    EXPECT_GT(x0 + *half_way, 10.3) << x0;
+    const auto w = plateau_wall_offset(v, Vec3(x0, 1.5, 1.5), Vec3::UnitX(), bone, fitter);
+    ASSERT_TRUE(w.has_value()) << x0;
+    // Trilinear interpolation between voxel centres blurs the sampled profile a little more.
+    EXPECT_TRUE(test::near(x0 + *w, 10.0, 0.15)) << x0 << " -> " << x0 + *w;
+  }
+  // A plain blurred step of an organ into darker tissue: the wall is the step.
+  const auto step = blurred_layers({10.0}, {350, 40}, 1.0);
+  const IntensityModel vessel{350, 100};
+  const auto w = plateau_wall_offset(step, Vec3(9.6, 1.5, 1.5), Vec3::UnitX(), vessel, fitter);
+  ASSERT_TRUE(w.has_value());
+  EXPECT_TRUE(test::near(9.6 + *w, 10.0, 0.15)) << 9.6 + *w;
+  // The inside level outside the band (the point is not in the organ): no wall.
+  EXPECT_FALSE(plateau_wall_offset(step, Vec3(14.0, 1.5, 1.5), Vec3::UnitX(), vessel, fitter).has_value());
 }
 
 TEST(IntensityModel, RobustEstimateFromSeedNeighbourhood) {

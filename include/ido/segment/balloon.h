@@ -54,6 +54,13 @@ struct BalloonOptions {
   /// Scanner blur (σ, × h) assumed when correcting the inward shift σ² H of the half-way
   /// level of a blurred curved wall (σ² = pre-smoothing² + this²; H the mean curvature).
   double scanner_blur_voxels = 0.7;
+  /// Thin-layer wall model of the edge stage with accept_brighter (bone): the wall is the
+  /// outer edge of the cortex from a three-plateau fit (PlateauProfileFitter: marrow, cortex,
+  /// surroundings) whose blur along the normal is the pre-smoothing plus, along each grid
+  /// axis a, the scanner blur (scanner_blur_voxels · s_a), the voxel's partial-volume box
+  /// (variance s_a² / 12) and the trilinear sampling (≈ s_a² / 6), s_a the spacing. The half-way level between the profile's extremes
+  /// puts a 1.5-mm cortex's wall about half a voxel outward (measured: docs/segmentation.md).
+  bool plateau_wall = true;
   bool threaded = true;                 ///< oneTBB for the per-vertex work
 };
 

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
+#include <array>
 #include <optional>
 #include <vector>
 
@@ -92,5 +93,58 @@ struct BalloonForceWeights {
 [[nodiscard]] double first_transition_limit(const image::Volume<float>& smoothed, const Vec3& point_mm,
                                             const Vec3& normal, const IntensityModel& model, double search_mm,
                                             double step_mm, double wall_mm, int background_side);
+
+/// A profile along a normal read as three plateaus blurred by a known Gaussian: level
+/// inside up to @p inner_mm, a middle level up to @p outer_mm, an outside level beyond.
+struct PlateauFit {
+  double inner_mm = 0.0;              ///< first transition (offset along the normal, mm)
+  double outer_mm = 0.0;              ///< second transition, > inner_mm
+  std::array<double, 3> levels{};     ///< inside, middle, outside (intensity units)
+  double rms_residual = 0.0;          ///< root mean square misfit (intensity units)
+};
+
+/// Least-squares fit of a blurred three-plateau profile with a known blur σ:
+///   I(t) = c (1 − Φ((t − a)/σ)) + m (Φ((t − a)/σ) − Φ((t − b)/σ)) + o Φ((t − b)/σ),
+/// Φ the standard normal CDF, a < b the transitions and c, m, o the levels, to samples
+/// I(t_k) at t_k = −reach + k · step (k = 0 … 2·reach/step). The levels are linear given
+/// (a, b), so (a, b) are searched on a grid of candidate_step within ±search (b − a ≥
+/// min_separation) and the levels solved exactly for each pair (variable projection; Golub
+/// & Pereyra, SIAM J. Numer. Anal. 1973); everything that does not depend on the samples is
+/// precomputed here. A thin layer whose level blur has lowered (a 1.5-mm cortex) is read at
+/// its real edges, where the half-way level between the profile's extremes lies up to half a
+/// voxel outward. The model has three levels: a fourth within reach (e.g. vessel, 1-voxel gap,
+/// cortex, marrow) is absorbed into a middle level and misplaces the edges.
+class PlateauProfileFitter {
+ public:
+  /// All lengths in mm. @throws ido::InvalidInput unless 0 < step, candidate_step, sigma and
+  /// search + 2 σ ≤ reach.
+  PlateauProfileFitter(double sigma_mm, double step_mm, double reach_mm, double search_mm, double candidate_step_mm,
+                       double min_separation_mm);
+  /// Number of samples fit() expects.
+  [[nodiscard]] std::size_t sample_count() const noexcept { return m_samples; }
+  /// Offset (mm) of sample k along the normal.
+  [[nodiscard]] double sample_offset_mm(std::size_t k) const noexcept;
+  /// The best fit, or nothing when @p samples has the wrong size.
+  [[nodiscard]] std::optional<PlateauFit> fit(const std::vector<double>& samples) const;
+
+ private:
+  struct Pair {
+    int a = 0, b = 0;              // candidate indices
+    std::array<double, 6> inv{};   // inverse of the 3×3 normal matrix (xx, xy, xz, yy, yz, zz)
+  };
+  std::size_t m_samples = 0;
+  double m_step = 0, m_reach = 0;
+  std::vector<double> m_candidates;  // transition offsets (mm)
+  std::vector<double> m_cdf;         // Φ((t_k − x_j)/σ), row j, column k
+  std::vector<Pair> m_pairs;
+};
+
+/// The organ's wall along @p normal from a three-plateau fit (PlateauProfileFitter) of the
+/// smoothed profile at @p point_mm: walking outward, the first transition into a level
+/// outside the accepted band (model), provided the inside level is accepted. Nothing when
+/// the fit finds no such transition. Offset in mm along the normal.
+[[nodiscard]] std::optional<double> plateau_wall_offset(const image::Volume<float>& smoothed, const Vec3& point_mm,
+                                                        const Vec3& normal, const IntensityModel& model,
+                                                        const PlateauProfileFitter& fitter);
 
 }  // namespace ido::segment
