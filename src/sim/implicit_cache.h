@@ -1,9 +1,11 @@
 // SPDX-License-Identifier: Apache-2.0
-// Private: the assembled block-sparse (BSR, 3×3 blocks) stiffness used by implicit Euler and
-// the solver's work vectors. The pattern — free particles only: blocks on a fixed particle's
-// row or column are dropped, since fixed particles do not move — is built once per (model
-// set, particle count, fixed set); each step only refills the values, every model adding its
-// blocks straight into their slots in a fixed order (deterministic whether threaded or not).
+// Private: the assembled block-sparse stiffness used by implicit Euler and the solver's work
+// vectors. The system is symmetric, so only its upper block triangle is stored (BSR, 3×3
+// blocks, rows in solver order, the diagonal block first in each row). Solver order: the free
+// particles only (fixed particles do not move; their rows and columns are dropped). The
+// pattern is built once per (model set, particle count, fixed set); each step only refills
+// the values, every model adding its blocks straight into their slots in a fixed order
+// (deterministic whether threaded or not).
 #pragma once
 
 #include <cstdint>
@@ -17,14 +19,21 @@ struct World::ImplicitCache {
   bool valid = false;
   std::size_t particle_count = 0;
   std::vector<std::uint8_t> fixed;           // fixed flags the pattern was built for
-  std::vector<std::int32_t> row_offset;      // BSR rows = particles (fixed rows are empty)
-  std::vector<std::int32_t> col;             // column particle of each slot, sorted per row
-  std::vector<std::int32_t> diag_slot;       // slot of (i, i), −1 for a fixed particle
-  std::vector<std::vector<std::int32_t>> model_slots;   // per model: slot of each pattern block
-  std::vector<Mat3> values;                  // K per slot, N/mm
-  std::vector<Mat3> precond;                 // per particle: inverse diagonal block of A
-  std::vector<Vec3> warm_dv;                 // previous Δv, mm/s
-  std::vector<Vec3> b, r, z, d, q, dv, kv;   // CG work vectors
+  std::vector<std::int32_t> particle_of;     // solver index → particle
+  std::vector<std::int32_t> row_offset;      // upper BSR rows, solver order
+  std::vector<std::int32_t> col;             // column (solver index) per slot, sorted per row
+  std::vector<std::vector<std::int32_t>> model_slots;   // per model: slot of each pattern
+                                                        // block, −1 for lower or fixed ones
+  std::vector<Mat3> values;                  // K per slot (N/mm), then A = M' + ak K in place
+  std::vector<Mat3> dinv;                    // per row: inverse of the preconditioner's
+                                             // diagonal block
+  std::vector<std::int32_t> fallback_rows;   // rows whose diagonal block is not SPD
+  std::vector<Mat3> fallback_excess;         // their A_ii − ω D̃_i
+  std::vector<Vec3> warm_dv;                 // previous Δv per particle, mm/s
+  std::vector<Vec3> warm_dv_prev;            // the one before
+  int warm_steps = 0;                        // consecutive implicit steps stored (0, 1, 2+)
+  std::int64_t warm_step = -2;               // World::step_count() at the last solve
+  std::vector<Vec3> b, x, r, rho, sigma, dir, q, s, g, t;   // CG work vectors (solver order)
 
   void invalidate() { valid = false; }
   /// Builds the pattern if needed.

@@ -62,6 +62,9 @@ class ForceModel {
   /// when slots[k] < 0 (e.g. a block on a fixed particle). The additions happen in pattern
   /// order whether @p threaded or not, so the sums are deterministic. The default computes
   /// stiffness_blocks() into a scratch buffer; models override it to skip the buffer.
+  /// Implicit Euler stores only the upper block triangle (it skips block (a, b) when the
+  /// transposed block (b, a) is the stored one), so the pattern must be symmetric and the
+  /// blocks satisfy K_ba = K_abᵀ, as any energy's Hessian does.
   virtual void add_stiffness_to(const Particles& particles, std::span<const std::int32_t> slots,
                                 std::span<Mat3> values, bool threaded) const;
   /// True when stiffness_pattern() is non-empty.

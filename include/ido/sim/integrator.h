@@ -48,9 +48,11 @@ void velocity_verlet(World& world, double dt_s);
 void rk4(World& world, double dt_s);
 /// Backward Euler linearised once per step (Baraff & Witkin 1998):
 /// (M + dt C + dt² K) Δv = dt (f − dt K v), solved with preconditioned conjugate gradients
-/// (symmetric block Gauss–Seidel by default, or Jacobi) warm-started from the previous step's
-/// Δv (World::implicit_options()). K is assembled once per step into a block-sparse matrix
-/// whose pattern is built once. Models without stiffness contribute their forces only.
+/// (symmetric block SOR by default, or Jacobi) warm-started from the previous steps' Δv
+/// (World::implicit_options()). K is assembled once per step into a block-sparse matrix
+/// (upper block triangle only: the models' stiffness must be symmetric, with a symmetric
+/// pattern) whose pattern is built once. Models without stiffness contribute their forces
+/// only. @throws ido::InvalidInput for a relaxation outside (0, 2).
 void implicit_euler(World& world, double dt_s);
 }  // namespace integrators
 
