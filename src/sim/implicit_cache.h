@@ -33,7 +33,10 @@ struct World::ImplicitCache {
   std::vector<Vec3> warm_dv_prev;            // the one before
   int warm_steps = 0;                        // consecutive implicit steps stored (0, 1, 2+)
   std::int64_t warm_step = -2;               // World::step_count() at the last solve
-  std::vector<Vec3> b, x, r, rho, sigma, dir, q, s, g, t;   // CG work vectors (solver order)
+  std::vector<Vec3> b, x, r, dir, q, s, t;  // CG work vectors (solver order)
+  // SOR-preconditioned CG (sor_kernels.h layout): blocks row-major, vectors 4 doubles a row.
+  std::vector<double> sor_blocks, sor_dinv;
+  std::vector<double> x4, rho4, sigma4, p4, s4, g4, t4, q4;
 
   void invalidate() { valid = false; }
   /// Builds the pattern if needed.

@@ -12,6 +12,7 @@
 #include "ido/sim/units.h"
 #include "ido/sim/world.h"
 #include "implicit_cache.h"
+#include "sor_kernels.h"
 
 namespace ido::sim {
 
@@ -204,7 +205,10 @@ void World::ImplicitCache::ensure(const World& world) {
   if (warm_dv.size() != n) warm_dv.assign(n, Vec3::Zero());
   if (warm_dv_prev.size() != n) warm_dv_prev.assign(n, Vec3::Zero());
   warm_steps = 0;
-  for (auto* v : {&b, &x, &r, &rho, &sigma, &dir, &q, &s, &g, &t}) v->assign(m, Vec3::Zero());
+  for (auto* v : {&b, &x, &r, &dir, &q, &s, &t}) v->assign(m, Vec3::Zero());
+  for (auto* v : {&x4, &rho4, &sigma4, &p4, &s4, &g4, &t4, &q4}) v->assign(4 * m, 0.0);
+  sor_blocks.assign(9 * col.size() + 3, 0.0);
+  sor_dinv.assign(9 * m + 3, 0.0);
   valid = true;
 }
 
@@ -376,79 +380,68 @@ void implicit_euler(World& world, double dt_s) {
       // with P — one pass over the stored upper triangle in all, instead of a product with
       // A plus two sweeps. Vectors are kept in unscaled form: ρ = P⁻¹ r (so r = P ρ),
       // σ = D̃ ρ, p = C p̂; Â p̂ = Cᵀ q with q = t + P⁻¹ (p + E t), and x += α t.
-      auto& rho = cache.rho;
-      auto& sigma = cache.sigma;
-      auto& pd = cache.dir;
-      auto& s = cache.s;
-      auto& g = cache.g;
-      // Forward solve P w = u, u given in g (overwritten with D̃ w = u − L w).
-      auto forward = [&](std::vector<Vec3>& w) {
-        for (std::size_t i = 0; i < m; ++i) {
-          const Vec3 wi = cache.dinv[i] * g[i];
-          w[i] = wi;
-          for (auto k = row_offset[i] + 1; k < row_offset[i + 1]; ++k)
-            g[static_cast<std::size_t>(col[slot(k)])].noalias() -= values[slot(k)].transpose() * wi;
-        }
-      };
-      // ‖r‖² with r = P ρ = σ + L ρ (the recursive residual of PCG).
+      // Blocks and D̃⁻¹ row-major for the kernels (sor_kernels.h), vectors padded to 4.
+      for (std::size_t k = 0; k < col.size(); ++k)
+        Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(cache.sor_blocks.data() + 9 * k) = values[k];
+      for (std::size_t i = 0; i < m; ++i)
+        Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(cache.sor_dinv.data() + 9 * i) = cache.dinv[i];
+      const detail::SorMatrix sor{m, row_offset.data(), col.data(), cache.sor_blocks.data(),
+                                  cache.sor_dinv.data()};
+      double* rho = cache.rho4.data();
+      double* sigma = cache.sigma4.data();
+      double* pd = cache.p4.data();
+      double* s = cache.s4.data();
+      double* g = cache.g4.data();
+      double* t4 = cache.t4.data();
+      double* q4 = cache.q4.data();
+      double* x4 = cache.x4.data();
+      const std::size_t m4 = 4 * m;
+      auto row3 = [](double* vec, std::size_t i) { return Eigen::Map<Vec3>(vec + 4 * i); };
+      // ‖r‖² with r = P ρ = σ + L ρ (the recursive residual of PCG); lr scratch in cache.r.
       auto residual2 = [&]() {
         auto& lr = cache.r;
         std::fill(lr.begin(), lr.end(), Vec3::Zero());
         double sum = 0.0;
         for (std::size_t i = 0; i < m; ++i) {
-          const Vec3 ri = sigma[i] + lr[i];
-          sum += ri.squaredNorm();
+          const Vec3 rhoi = row3(rho, i);
+          sum += (row3(sigma, i) + lr[i]).squaredNorm();
           for (auto k = row_offset[i] + 1; k < row_offset[i + 1]; ++k)
-            lr[static_cast<std::size_t>(col[slot(k)])].noalias() += values[slot(k)].transpose() * rho[i];
+            lr[static_cast<std::size_t>(col[slot(k)])].noalias() += values[slot(k)].transpose() * rhoi;
         }
         return sum;
       };
-      g = r;
-      forward(rho);
-      sigma = g;
+      std::fill(x4, x4 + m4, 0.0);
+      for (std::size_t i = 0; i < m; ++i) {
+        row3(g, i) = r[i];
+        g[4 * i + 3] = 0.0;
+      }
+      detail::sor_forward(sor, g, rho);   // ρ = P⁻¹ r, g = σ = D̃ ρ
+      std::copy(g, g + m4, sigma);
+      std::fill(pd, pd + m4, 0.0);
       double gamma = 0.0;
-      for (std::size_t i = 0; i < m; ++i) gamma += rho[i].dot(sigma[i]);
+      for (std::size_t k = 0; k < m4; ++k) gamma += rho[k] * sigma[k];
       // ‖r‖² / ρ·σ, to decide when the true residual is worth computing.
       double ratio = rr / gamma;
-      pd = sigma;
       double beta = 0.0;
-      std::size_t fallback = 0;
       while (it < opts.cg_max_iterations) {
-        // Backward solve Pᵀ t = p (s = D̃ t), with the direction update p = σ + β p fused in;
-        // g = p + E t for the forward solve.
-        fallback = cache.fallback_rows.size();
-        for (std::size_t i = m; i-- > 0;) {
-          const Vec3 pi = sigma[i] + beta * pd[i];
-          pd[i] = pi;
-          Vec3 acc = pi;
-          for (auto k = row_offset[i] + 1; k < row_offset[i + 1]; ++k)
-            acc.noalias() -= values[slot(k)] * t[static_cast<std::size_t>(col[slot(k)])];
-          s[i] = acc;
-          t[i].noalias() = cache.dinv[i] * acc;
-          g[i] = pi + (omega - 2.0) * acc;
-          if (fallback > 0 && static_cast<std::size_t>(cache.fallback_rows[fallback - 1]) == i) {
-            --fallback;
-            g[i].noalias() += cache.fallback_excess[fallback] * t[i];
-          }
+        // Backward solve Pᵀ t = p (s = D̃ t) with the direction update p = σ + β p fused in,
+        // and g = p + E t for the forward solve (E t = (ω − 2) s, plus the correction of rows
+        // whose diagonal block fell back to Jacobi's).
+        detail::sor_backward(sor, sigma, beta, omega - 2.0, pd, s, t4, g);
+        for (std::size_t fr = 0; fr < cache.fallback_rows.size(); ++fr) {
+          const auto i = static_cast<std::size_t>(cache.fallback_rows[fr]);
+          row3(g, i) += cache.fallback_excess[fr] * Vec3(row3(t4, i));
         }
-        forward(q);   // q = P⁻¹ (p + E t), g = D̃ q
-        double pq = 0.0;
-        for (std::size_t i = 0; i < m; ++i) {
-          q[i] += t[i];
-          pq += pd[i].dot(q[i]);
-        }
+        detail::sor_forward(sor, g, q4);   // q = P⁻¹ (p + E t), g = D̃ q
+        const double pq = detail::sor_add_dot(m, q4, t4, pd);
         if (!(pq > 0.0)) {
+          // Not positive definite along p: keep the progress made; never re-apply a stale
+          // warm start.
           if (it == 0) std::fill(x.begin(), x.end(), Vec3::Zero());
           break;
         }
         const double alpha = gamma / pq;
-        double gamma_new = 0.0;
-        for (std::size_t i = 0; i < m; ++i) {
-          x[i] += alpha * t[i];
-          rho[i] -= alpha * q[i];
-          sigma[i] -= alpha * (s[i] + g[i]);
-          gamma_new += rho[i].dot(sigma[i]);
-        }
+        const double gamma_new = detail::sor_update(m, alpha, t4, q4, s, g, x4, rho, sigma);
         ++it;
         if (ratio * gamma_new <= target || it == opts.cg_max_iterations) {
           rr = residual2();
@@ -458,6 +451,7 @@ void implicit_euler(World& world, double dt_s) {
         beta = gamma_new / gamma;
         gamma = gamma_new;
       }
+      for (std::size_t i = 0; i < m; ++i) x[i] += row3(x4, i);
     }
   }
   auto& stats = world.step_stats();
