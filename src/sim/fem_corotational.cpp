@@ -7,12 +7,19 @@ CorotationalFem::CorotationalFem(std::vector<Tet> tets, std::span<const Vec3> re
                                  const ElasticMaterial& material)
     : TetFemModel(std::move(tets), rest_positions_mm, material),
       m_rotation(m_tets.size(), Eigen::Quaterniond::Identity()),
+      m_previous(m_tets.size(), Eigen::Quaterniond::Identity()),
       m_cached(m_tets.size()) {}
 
 Mat3 CorotationalFem::rotation(std::size_t e, const Mat3& F) const {
   auto& c = m_cached[e];
   if (c.F == F) return c.R;   // same positions as the last call: same (deterministic) result
-  c.R = extract_rotation(F, m_rotation[e]);
+  // Warm start: the last rotation advanced by the last change (q (q₋₁⁻¹ q)), one Newton
+  // iteration fewer than starting from q when the element turns smoothly.
+  auto& q = m_rotation[e];
+  const Eigen::Quaterniond last = q;
+  q = (q * (m_previous[e].conjugate() * q)).normalized();
+  m_previous[e] = last;
+  c.R = extract_rotation(F, q);
   c.F = F;
   return c.R;
 }

@@ -124,21 +124,23 @@ __attribute__((target("avx2,fma"))) void backward_avx2(const SorMatrix& a, const
     _mm256_storeu_pd(p + 4 * i, pi);
     // Row r of U_ij times t_j, lane by lane (t_j's fourth lane is 0, so the block's
     // neighbouring entry read into a row's fourth lane adds nothing); two blocks at a time.
+    // The blocks from the row's end backwards: the first one (column i + 1, whose t was
+    // computed just before) comes last, so the row-to-row dependency chain stays short.
     __m256d a0 = _mm256_setzero_pd(), a1 = a0, a2 = a0, b0 = a0, b1 = a0, b2 = a0;
-    auto k = a.row_offset[i] + 1;
-    const auto end = a.row_offset[i + 1];
-    for (; k + 1 < end; k += 2) {
-      const double* u = a.blocks + 9 * at(k);
-      const __m256d tj = _mm256_loadu_pd(t + 4 * at(a.col[at(k)]));
-      const __m256d tk = _mm256_loadu_pd(t + 4 * at(a.col[at(k) + 1]));
-      a0 = _mm256_fmadd_pd(_mm256_loadu_pd(u), tj, a0);
-      a1 = _mm256_fmadd_pd(_mm256_loadu_pd(u + 3), tj, a1);
-      a2 = _mm256_fmadd_pd(_mm256_loadu_pd(u + 6), tj, a2);
+    const auto begin = a.row_offset[i] + 1;
+    auto k = a.row_offset[i + 1] - 1;
+    for (; k - 1 >= begin; k -= 2) {
+      const double* u = a.blocks + 9 * at(k - 1);
+      const __m256d tj = _mm256_loadu_pd(t + 4 * at(a.col[at(k) - 1]));
+      const __m256d tk = _mm256_loadu_pd(t + 4 * at(a.col[at(k)]));
       b0 = _mm256_fmadd_pd(_mm256_loadu_pd(u + 9), tk, b0);
       b1 = _mm256_fmadd_pd(_mm256_loadu_pd(u + 12), tk, b1);
       b2 = _mm256_fmadd_pd(_mm256_loadu_pd(u + 15), tk, b2);
+      a0 = _mm256_fmadd_pd(_mm256_loadu_pd(u), tj, a0);
+      a1 = _mm256_fmadd_pd(_mm256_loadu_pd(u + 3), tj, a1);
+      a2 = _mm256_fmadd_pd(_mm256_loadu_pd(u + 6), tj, a2);
     }
-    if (k < end) {
+    if (k >= begin) {
       const double* u = a.blocks + 9 * at(k);
       const __m256d tj = _mm256_loadu_pd(t + 4 * at(a.col[at(k)]));
       a0 = _mm256_fmadd_pd(_mm256_loadu_pd(u), tj, a0);

@@ -36,6 +36,7 @@ class CorotationalFem final : public TetFemModel {
     Mat3 R = Mat3::Identity();
   };
   mutable std::vector<Eigen::Quaterniond> m_rotation;   // warm start per element
+  mutable std::vector<Eigen::Quaterniond> m_previous;   // the rotation before it
   mutable std::vector<CachedRotation> m_cached;
 };
 
