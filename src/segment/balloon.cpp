@@ -105,18 +105,23 @@ struct Balloon::State {
   // The thin-layer wall model of the edge stage: fitters for blur σ = plateau_sigma0 +
   // q · plateau_dsigma (mm), q = 0, 1, ...; the blur along a normal picks one (plateau_for).
   std::vector<PlateauProfileFitter> plateau;
+  std::vector<ThinGapWallModel> thin_gap;  // the same blur levels, for a thin gap to a neighbour
   double plateau_sigma0 = 0, plateau_dsigma = 1;
   Vec3 scanner_blur2_mm2 = Vec3::Zero();  // scanner blur variance along each grid axis (mm²)
   double smoothing2_mm2 = 0;              // pre-smoothing variance (mm²)
 
   // The fitter whose σ is nearest the blur along @p normal: pre-smoothing plus the scanner's
   // blur and the voxel's partial-volume box along each grid axis.
-  const PlateauProfileFitter* plateau_for(const Vec3& normal) const {
-    if (plateau.empty()) return nullptr;
+  double blur_sigma_mm(const Vec3& normal) const {
     const Vec3 nd = smoothed.direction().transpose() * normal;  // normal in grid axes
-    const double sigma = std::sqrt(smoothing2_mm2 + nd.cwiseAbs2().dot(scanner_blur2_mm2));
-    const auto q = std::lround((sigma - plateau_sigma0) / plateau_dsigma);
-    return &plateau[std::size_t(std::clamp<long>(q, 0, long(plateau.size()) - 1))];
+    return std::sqrt(smoothing2_mm2 + nd.cwiseAbs2().dot(scanner_blur2_mm2));
+  }
+  std::size_t blur_level(const Vec3& normal) const {
+    const auto q = std::lround((blur_sigma_mm(normal) - plateau_sigma0) / plateau_dsigma);
+    return std::size_t(std::clamp<long>(q, 0, std::max<long>(long(plateau.size()) - 1, 0)));
+  }
+  const PlateauProfileFitter* plateau_for(const Vec3& normal) const {
+    return plateau.empty() ? nullptr : &plateau[blur_level(normal)];
   }
 
   geometry::TriangleMesh mesh() const {
@@ -231,7 +236,16 @@ struct Balloon::State {
               if (const PlateauProfileFitter* f = plateau_for(nrm))
                 if (const auto w = plateau_wall_offset(smoothed, x[i], nrm, model, *f)) t = *w;
             } else if (t) {
-              t = first_transition_limit(smoothed, x[i], nrm, model, search, 0.2 * h, *t, background_side);
+              const double limited = first_transition_limit(smoothed, x[i], nrm, model, search, 0.2 * h, *t, background_side);
+              // Capped at a thin gap to a neighbour on the other side of the band (bone beside a
+              // vessel, seen a voxel beyond the steepest rise): the neighbour's blur shifts both
+              // the band's exit and a dark valley's half-way level, so read the gap from a
+              // plateau fit up to the neighbour's rim.
+              std::optional<double> w;
+              if (limited < *t && !thin_gap.empty() &&
+                  (smoothed.sample(x[i] + nrm * (*t + h)) - model.reference) * background_side < -model.tolerance)
+                w = thin_gap[blur_level(nrm)].wall_offset(smoothed, x[i], nrm, model, background_side, *t);
+              t = w && *w <= *t ? *w : limited;
             }
             if (t) {
               // Blur (the scanner's and our pre-smoothing) moves the half-way level of a curved
@@ -341,8 +355,10 @@ Balloon::Balloon(const image::Volume<float>& ct, const std::vector<Vec3>& seeds_
     const double hi = std::sqrt(st.smoothing2_mm2 + st.scanner_blur2_mm2.maxCoeff());
     st.plateau_sigma0 = std::max(lo, 0.1 * h);
     st.plateau_dsigma = 0.05 * h;
-    for (double sg = st.plateau_sigma0; sg <= hi + 0.5 * st.plateau_dsigma; sg += st.plateau_dsigma)
+    for (double sg = st.plateau_sigma0; sg <= hi + 0.5 * st.plateau_dsigma; sg += st.plateau_dsigma) {
       st.plateau.emplace_back(sg, 0.2 * h, search + std::max(h, 2.0 * sg), search, 0.1 * h, 0.5 * h);
+      st.thin_gap.emplace_back(sg, search, 0.2 * h);
+    }
   }
   m->report.model = m->model;
   geometry::TriangleMesh all;

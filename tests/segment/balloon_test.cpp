@@ -227,6 +227,29 @@ TEST(PlateauFit, ThinCortexWallIsItsOuterEdgeNotTheHalfWayLevel) {
   EXPECT_FALSE(plateau_wall_offset(step, Vec3(14.0, 1.5, 1.5), Vec3::UnitX(), vessel, fitter).has_value());
 }
 
+TEST(PlateauFit, ThinGapToBoneIsReadAtTheVesselWall) {
+  // Vessel (350) up to x = 10, one voxel of soft tissue (40), a 2-voxel cortex (1200), marrow
+  // (250), blurred by σ = 1 voxel: the blurred bone fills the gap, and the band's exit lies
+  // half a voxel beyond the vessel's wall. The gap fit, up to the bone's rim, reads the wall.
+  const auto v = blurred_layers({10.0, 11.0, 13.0}, {350, 40, 1200, 250}, 1.0);
+  const IntensityModel m{350, 155};
+  const double sigma = std::sqrt(1.0 + 1.0 / 6.0);  // trilinear sampling adds ≈ 1/6 voxel²
+  for (double x0 : {9.2, 9.6, 10.2}) {
+    const auto rim = edge_offset_along_normal(v, Vec3(x0, 1.5, 1.5), Vec3::UnitX(), m, 2.0, 0.2, 0.25 * 155, 1.0);
+    ASSERT_TRUE(rim.has_value());
+    const double exit = first_transition_limit(v, Vec3(x0, 1.5, 1.5), Vec3::UnitX(), m, 2.0, 0.2, *rim, -1);
+    EXPECT_GT(x0 + exit, 10.4) << x0;
+    const auto w = thin_gap_wall_offset(v, Vec3(x0, 1.5, 1.5), Vec3::UnitX(), m, -1, sigma, 2.0, 0.2, *rim);
+    ASSERT_TRUE(w.has_value()) << x0;
+    EXPECT_TRUE(test::near(x0 + *w, 10.0, 0.15)) << x0 << " -> " << x0 + *w;
+  }
+  // A plain wall into darker tissue has no neighbour beyond the band: no gap reading.
+  const auto step = blurred_layers({10.0}, {350, 40}, 1.0);
+  EXPECT_FALSE(thin_gap_wall_offset(step, Vec3(9.6, 1.5, 1.5), Vec3::UnitX(), m, -1, sigma, 2.0, 0.2, 1.5).has_value());
+  // Without a known background side: nothing.
+  EXPECT_FALSE(thin_gap_wall_offset(v, Vec3(9.6, 1.5, 1.5), Vec3::UnitX(), m, 0, sigma, 2.0, 0.2, 1.5).has_value());
+}
+
 TEST(IntensityModel, RobustEstimateFromSeedNeighbourhood) {
   const auto s = make_volume({30, 30, 30}, Vec3(1, 1, 1), [](const Vec3& p) { return (p - Vec3(15, 15, 15)).norm() < 10; },
                              400.0, 40.0);

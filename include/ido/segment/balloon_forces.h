@@ -120,6 +120,14 @@ class PlateauProfileFitter {
   /// search + 2 σ ≤ reach.
   PlateauProfileFitter(double sigma_mm, double step_mm, double reach_mm, double search_mm, double candidate_step_mm,
                        double min_separation_mm);
+  /// The same with samples at t = samples_mm[0] + k · step up to samples_mm[1], transitions
+  /// searched within candidates_mm (both ranges in mm along the normal) and, when
+  /// @p outer_sigma_mm > 0, that blur for the second transition (a neighbour's rim crossed
+  /// obliquely). @throws ido::InvalidInput unless σ, the steps and the ranges are positive /
+  /// non-empty.
+  PlateauProfileFitter(double sigma_mm, double step_mm, const std::array<double, 2>& samples_mm,
+                       const std::array<double, 2>& candidates_mm, double candidate_step_mm, double min_separation_mm,
+                       double outer_sigma_mm = 0.0);
   /// Number of samples fit() expects.
   [[nodiscard]] std::size_t sample_count() const noexcept { return m_samples; }
   /// Offset (mm) of sample k along the normal.
@@ -133,9 +141,10 @@ class PlateauProfileFitter {
     std::array<double, 6> inv{};   // inverse of the 3×3 normal matrix (xx, xy, xz, yy, yz, zz)
   };
   std::size_t m_samples = 0;
-  double m_step = 0, m_reach = 0;
+  double m_step = 0, m_first = 0;
   std::vector<double> m_candidates;  // transition offsets (mm)
   std::vector<double> m_cdf;         // Φ((t_k − x_j)/σ), row j, column k
+  std::vector<double> m_cdf_outer;   // the same with the second transition's σ; empty = m_cdf
   std::vector<Pair> m_pairs;
 };
 
@@ -146,5 +155,41 @@ class PlateauProfileFitter {
 [[nodiscard]] std::optional<double> plateau_wall_offset(const image::Volume<float>& smoothed, const Vec3& point_mm,
                                                         const Vec3& normal, const IntensityModel& model,
                                                         const PlateauProfileFitter& fitter);
+
+/// The wall of an organ separated by a thin gap from a neighbour on the other side of the band
+/// (bone beside a contrast-filled vessel): blur fills the gap with the neighbour's intensity,
+/// so both the band's exit and the half-way level lie outside the real wall, and where the
+/// blurred gap still dips below the band a dark-valley reading lies inside it. Fits the three
+/// plateaus organ, gap, neighbour (PlateauProfileFitter, blur σ = @p sigma_mm for the organ's
+/// wall, 1–2.2 σ for the neighbour's rim, which a ray usually crosses obliquely) to the
+/// profile from 2 search_mm + 2σ inside the neighbour's rim (@p neighbour_mm, the steepest
+/// rise found by edge_offset_along_normal) to one widened σ beyond it, transitions searched
+/// within 2 search_mm inside the rim every step_mm / 2, the profile sampled every @p step_mm;
+/// the far side of the neighbour (a cortex's marrow) is left out of the fit. Returns the fit's
+/// first transition when it reads organ | gap | neighbour: inside level accepted, gap level
+/// beyond the band on the side of the usual surroundings (@p background_side, see
+/// first_transition_limit), neighbour level a further tolerance beyond it on the other side
+/// (reference ± 2 tolerances, as first_transition_limit's cap), and a root mean square misfit
+/// within 0.1 tolerance (about the pre-smoothed noise); nothing otherwise (a
+/// plain wall, whose blurred flank a middle level can also fit). Offsets in mm along the
+/// normal. One call builds the fitters; ThinGapWallModel keeps them for repeated use.
+[[nodiscard]] std::optional<double> thin_gap_wall_offset(const image::Volume<float>& smoothed, const Vec3& point_mm,
+                                                         const Vec3& normal, const IntensityModel& model,
+                                                         int background_side, double sigma_mm, double search_mm,
+                                                         double step_mm, double neighbour_mm);
+
+/// thin_gap_wall_offset with its fitters built once (they do not depend on the profile).
+class ThinGapWallModel {
+ public:
+  /// @throws ido::InvalidInput unless σ, search and step (mm) are positive.
+  ThinGapWallModel(double sigma_mm, double search_mm, double step_mm);
+  /// See thin_gap_wall_offset.
+  [[nodiscard]] std::optional<double> wall_offset(const image::Volume<float>& smoothed, const Vec3& point_mm,
+                                                  const Vec3& normal, const IntensityModel& model, int background_side,
+                                                  double neighbour_mm) const;
+
+ private:
+  std::vector<PlateauProfileFitter> m_fitters;  // one per widening of the neighbour's blur
+};
 
 }  // namespace ido::segment
