@@ -33,6 +33,8 @@ int main(int argc, char** argv) {
   CLI::App app{"ido — toolkit for computer-assisted surgery (balloon segmentation, "
                "deformable simulation, bone drilling)"};
   app.require_subcommand(1);
+  // -v / -q may also follow the subcommand: its unknown options fall through to this app.
+  app.fallthrough();
   app.set_version_flag("--version", "ido 0.1.0");
   GlobalOptions global;
   app.add_flag("-v,--verbose", global.verbose, "Log details to stderr");

@@ -2,7 +2,9 @@
 #include "ido/io/file_info.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <string>
 #include <system_error>
 
 #include "ido/core/error.h"
@@ -13,6 +15,14 @@ namespace ido::io {
 
 FileKind file_kind(const std::filesystem::path& path) {
   if (is_triangle_mesh_path(path)) return FileKind::TriangleMesh;
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  if (ext == ".msh") {
+    // Gmsh files hold either kind: tetrahedra win; a file with triangles only is a surface.
+    if (read_tet_mesh(path).tet_count() > 0) return FileKind::TetMesh;
+    if (!read_triangle_mesh(path).triangles.empty()) return FileKind::TriangleMesh;
+    return FileKind::TetMesh;
+  }
   if (is_tet_mesh_path(path)) return FileKind::TetMesh;
   if (looks_like_volume(path)) return FileKind::Volume;
   std::error_code ec;

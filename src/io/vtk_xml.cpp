@@ -541,6 +541,24 @@ geometry::TriangleMesh parse_vtp(std::string_view bytes, const std::string& name
   return mesh;
 }
 
+namespace {
+/// VTK's 3D cell types other than VTK_TETRA (10): voxel, hexahedron, wedge, pyramid, prisms,
+/// their quadratic, polyhedral, Lagrange and Bézier forms. A TetMesh cannot hold them, and
+/// dropping them would lose volume without a word.
+bool is_volume_cell_other_than_tetra(std::int64_t type) {
+  switch (type) {
+    case 11: case 12: case 13: case 14: case 15: case 16:  // linear
+    case 24: case 25: case 26: case 27: case 29: case 32: case 33:  // quadratic
+    case 42:  // polyhedron
+    case 71: case 72: case 73: case 74:  // Lagrange
+    case 78: case 79: case 80: case 81:  // Bézier
+      return true;
+    default:
+      return false;
+  }
+}
+}  // namespace
+
 geometry::TetMesh parse_vtu(std::string_view bytes, const std::string& name) {
   const VtkDocument doc = open_document(bytes, name, "UnstructuredGrid");
   const XmlNode& piece = single_piece(doc, "UnstructuredGrid");
@@ -562,7 +580,11 @@ geometry::TetMesh parse_vtu(std::string_view bytes, const std::string& name) {
     std::size_t begin = 0;
     for (std::size_t c = 0; c < nc; ++c) {
       const auto end = static_cast<std::size_t>(cb.offsets[c]);
-      if (types[c] == 10) {  // VTK_TETRA; other cell types are not part of a TetMesh
+      if (is_volume_cell_other_than_tetra(static_cast<std::int64_t>(types[c])))
+        doc.fail(*cells, fmt::format("cell {} has VTK type {}, a volume cell that is not a linear tetrahedron "
+                                     "(only type 10 is read; split the mesh into tetrahedra first)",
+                                     c, static_cast<std::int64_t>(types[c])));
+      if (types[c] == 10) {  // VTK_TETRA; lower-dimensional cells (boundary faces, lines) are skipped
         if (end - begin != 4) doc.fail(*cells, fmt::format("tetrahedron {} has {} points, expected 4", c, end - begin));
         mesh.tets.push_back({static_cast<std::int32_t>(cb.connectivity[begin]), static_cast<std::int32_t>(cb.connectivity[begin + 1]),
                              static_cast<std::int32_t>(cb.connectivity[begin + 2]), static_cast<std::int32_t>(cb.connectivity[begin + 3])});

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "ido/core/math.h"
+#include "ido/core/parallel.h"
 #include "ido/core/progress.h"
 #include "ido/geometry/tet_mesh.h"
 #include "ido/image/volume.h"
@@ -212,6 +213,24 @@ struct Stuffer {
     prism(out, a, b, r);
   }
 };
+
+/// The field at every lattice vertex (@p value) and its sign (@p sign: −1, 0, +1).
+/// @p position maps a vertex id to mm, @p field a point in mm to its signed distance.
+template <class Position, class Field>
+void sample_lattice(std::size_t nv, Position&& position, Field&& field, bool threaded,
+                    std::vector<double>& value, std::vector<std::int8_t>& sign) {
+  value.assign(nv, 0.0);
+  sign.assign(nv, 0);
+  parallel_for_ranges(
+      nv,
+      [&](std::size_t b, std::size_t e) {
+        for (std::size_t v = b; v < e; ++v) {
+          value[v] = field(position(Id(v)));
+          sign[v] = value[v] < 0 ? -1 : (value[v] > 0 ? 1 : 0);
+        }
+      },
+      threaded, 1024);
+}
 
 /// The output mesh of a stuffing pass: the nodes the per-block tetrahedra use, renumbered in
 /// node order, and the tetrahedra block by block. @p node_position maps a node id to mm.

@@ -193,17 +193,9 @@ geometry::TetMesh tetrahedralize(const image::Volume<float>& signed_distance_mm,
 
   // 1. field at the lattice vertices
   report(progress, 0.0, "tetrahedralize: sampling the field");
-  std::vector<double> value(nv);
-  std::vector<std::int8_t> sign(nv);
-  parallel_for_ranges(
-      nv,
-      [&](std::size_t b, std::size_t e) {
-        for (std::size_t v = b; v < e; ++v) {
-          value[v] = field(L.position(Id(v)));
-          sign[v] = value[v] < 0 ? -1 : (value[v] > 0 ? 1 : 0);
-        }
-      },
-      threaded, 1024);
+  std::vector<double> value;
+  std::vector<std::int8_t> sign;
+  detail::sample_lattice(nv, [&](Id v) { return L.position(v); }, field, threaded, value, sign);
   check_cancel(progress);
 
   // 2. cut points on the edges whose ends have opposite signs

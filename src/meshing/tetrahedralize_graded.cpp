@@ -344,17 +344,9 @@ geometry::TetMesh tetrahedralize_graded(const image::Volume<float>& field_volume
       throw InvalidInput("tetrahedralize: edge_mm is too small for this field (graded lattice of " +
                          std::to_string(nv) + " vertices)");
     report(progress, 0.2, "tetrahedralize: sampling the field");
-    std::vector<double> value(nv);
-    std::vector<std::int8_t> sign(nv);
-    parallel_for_ranges(
-        nv,
-        [&](std::size_t b, std::size_t e) {
-          for (std::size_t v = b; v < e; ++v) {
-            value[v] = field(L.position(Id(v)));
-            sign[v] = value[v] < 0 ? -1 : (value[v] > 0 ? 1 : 0);
-          }
-        },
-        threaded, 1024);
+    std::vector<double> value;
+    std::vector<std::int8_t> sign;
+    sample_lattice(nv, [&](Id v) { return L.position(v); }, field, threaded, value, sign);
     check_cancel(progress);
     const std::vector<std::int8_t> sign_before_warping = sign;
 

@@ -101,6 +101,40 @@ TEST(CliConvert, MeshFormatsRoundTrip) {
   EXPECT_FALSE(fs::exists(dir / "t.stl"));
 }
 
+// A Gmsh file may hold a surface: info and convert see it as a triangle mesh, not as a
+// tetrahedral mesh without tetrahedra.
+TEST(CliConvert, TriangleGmshFileIsASurface) {
+  const auto dir = test::scratch_dir("cli-convert-trimsh");
+  geometry::TriangleMesh tetra_surface;
+  tetra_surface.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  tetra_surface.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  io::write_triangle_mesh(dir / "s.stl", tetra_surface);
+  ASSERT_EQ(test::run_tool("convert " + q(dir / "s.stl") + " " + q(dir / "s.msh")).exit_code, 0);
+  const auto info = test::run_tool("info --json " + q(dir / "s.msh"));
+  ASSERT_EQ(info.exit_code, 0) << info.err;
+  const auto j = json::parse(info.out);
+  EXPECT_EQ(j["kind"], "triangle_mesh") << info.out;
+  EXPECT_EQ(j["triangles"], 4) << info.out;
+  const auto back = test::run_tool("convert " + q(dir / "s.msh") + " " + q(dir / "s2.ply"));
+  ASSERT_EQ(back.exit_code, 0) << back.err;
+  // STL welds its corners in order of appearance: compare with what the STL reads as.
+  const auto from_stl = io::read_triangle_mesh(dir / "s.stl");
+  const auto through_msh = io::read_triangle_mesh(dir / "s2.ply");
+  EXPECT_EQ(through_msh.triangles, from_stl.triangles);
+  EXPECT_EQ(through_msh.vertices, from_stl.vertices);
+}
+
+// The global -q / -v flags work after the subcommand too.
+TEST(CliInfo, GlobalFlagsAfterTheSubcommand) {
+  const auto dir = test::scratch_dir("cli-info-flags");
+  io::write_tet_mesh(dir / "t.vtu", unit_tet());
+  EXPECT_EQ(test::run_tool("info " + q(dir / "t.vtu") + " -q").exit_code, 0);
+  EXPECT_EQ(test::run_tool("info --verbose " + q(dir / "t.vtu")).exit_code, 0);
+  const auto bad = test::run_tool("info " + q(dir / "t.vtu") + " --no-such-flag");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("--no-such-flag"), std::string::npos) << bad.err;
+}
+
 TEST(CliConvert, VolumeKeepsGridValuesAndType) {
   const auto dir = test::scratch_dir("cli-convert-vol");
   image::Volume<std::uint8_t> v(Index3{4, 3, 2}, Vec3(0.5, 0.75, 2.0), Vec3(-1, 2, 5));

@@ -10,11 +10,12 @@
 
 namespace ido::io {
 
-/// What kind of data a path holds, judged by its extension (or being a folder).
+/// What kind of data a path holds, judged by its extension (or being a folder); a Gmsh .msh
+/// file is read to tell a tetrahedral mesh from a triangle-only surface.
 enum class FileKind {
   Volume,        ///< .nii, .nii.gz, .nrrd, .nhdr, .mha, .mhd, or a DICOM folder
-  TriangleMesh,  ///< .stl, .obj, .ply, .vtp
-  TetMesh,       ///< .vtu, .msh, .node, .ele
+  TriangleMesh,  ///< .stl, .obj, .ply, .vtp, or a .msh holding triangles only
+  TetMesh,       ///< .vtu, .msh (with tetrahedra), .node, .ele
 };
 
 /// The kind of file at @p path. A folder counts as a DICOM volume unless its name ends in a

@@ -11,7 +11,7 @@ namespace ido::io {
 /// What a volume file holds before conversion to float.
 struct VolumeFileInfo {
   std::string format;        ///< "NIfTI", "NRRD", "MetaImage", "DICOM"
-  std::string pixel_type;    ///< the stored component type, e.g. "int16", "float32"
+  std::string pixel_type;    ///< the stored component type in ITK's names, e.g. "short", "float"
   int components = 1;        ///< components per voxel (only 1 is accepted by read_volume)
   std::string series_uid;    ///< DICOM only
 };
@@ -25,9 +25,10 @@ struct VolumeFileInfo {
 [[nodiscard]] image::Volume<float> read_volume(const std::filesystem::path& path,
                                                VolumeFileInfo* info = nullptr);
 
-/// Writes a volume; the format follows the extension (.nii, .nii.gz, .nrrd, .nhdr, .mha,
-/// .mhd). The write is atomic (temporary file + rename).
-/// @throws ido::IoError for an unknown extension or a failed write.
+/// Writes a volume; the format follows the extension (.nii, .nii.gz, .nrrd, .mha). Split
+/// header/data forms (.nhdr, .mhd) are refused: one file is renamed into place atomically
+/// (temporary file + rename), two could not be.
+/// @throws ido::IoError for an unknown or split-header extension, or a failed write.
 void write_volume(const std::filesystem::path& path, const image::Volume<float>& volume);
 void write_volume(const std::filesystem::path& path, const image::Volume<std::uint8_t>& volume);
 void write_volume(const std::filesystem::path& path, const image::Volume<std::int16_t>& volume);

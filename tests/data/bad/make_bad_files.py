@@ -39,8 +39,8 @@ VTU = """<?xml version="1.0"?>
       </Points>
       <Cells>
         <DataArray type="Int64" Name="connectivity" format="ascii">{conn}</DataArray>
-        <DataArray type="Int64" Name="offsets" format="ascii">4</DataArray>
-        <DataArray type="UInt8" Name="types" format="ascii">10</DataArray>
+        <DataArray type="Int64" Name="offsets" format="ascii">{offsets}</DataArray>
+        <DataArray type="UInt8" Name="types" format="ascii">{ctype}</DataArray>
       </Cells>
     </Piece>
   </UnstructuredGrid>
@@ -48,7 +48,8 @@ VTU = """<?xml version="1.0"?>
 """
 P = "0 0 0 1 0 0 0 1 0 0 0 1"
 def vtu(**kw):
-    d = dict(type="UnstructuredGrid", extra="", np=4, fmt="ascii", points=P, conn="0 1 2 3")
+    d = dict(type="UnstructuredGrid", extra="", np=4, fmt="ascii", points=P, conn="0 1 2 3",
+             offsets=4, ctype=10)
     d.update(kw)
     return VTU.format(**d)
 w("wrong_type.vtp", vtu())
@@ -61,6 +62,8 @@ w("bad_base64.vtu", vtu(fmt="binary", points="!!!!not*base64"))
 w("compressed.vtu", vtu(extra=' compressor="vtkLZMADataCompressor"'))
 w("nonnumeric.vtu", vtu(points="0 0 0 1 0 0 0 1 0 0 0 one"))
 w("nan.vtu", vtu(points="0 0 0 1 0 0 0 1 0 0 0 nan"))
+w("hexahedron.vtu", vtu(np=8, points="0 0 0 1 0 0 1 1 0 0 1 0 0 0 1 1 0 1 1 1 1 0 1 1",
+                        conn="0 1 2 3 4 5 6 7", offsets=8, ctype=12))
 MSH2 = "$MeshFormat\n{ver} {ft} 8\n$EndMeshFormat\n$Nodes\n{nn}\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 {z}\n$EndNodes\n$Elements\n1\n1 4 2 0 1 1 2 3 {last}\n$EndElements\n"
 def msh(**kw):
     d = dict(ver="2.2", ft=0, nn=4, z=1, last=4)
