@@ -51,53 +51,68 @@ Mat3 extract_rotation(const Mat3& F, Eigen::Quaterniond& q, int max_iterations) 
   // Stops when the step is below 1e-12 rad, below 1e-8 rad and no longer shrinking
   // (round-off floor), or after a Newton step below 1e-7 rad (the remaining error is then
   // of the order of its square).
-  double previous = 1e300;
-  Mat3 r = q.toRotationMatrix();
+  // Inside the loop q is not renormalised (R is built from it in homogeneous form, exact for
+  // any non-zero q), the Newton step is solved through the adjugate of H and the tests use
+  // squared norms: one division for each, no square roots, on the iteration's critical path.
+  auto rotation_of = [](const Eigen::Quaterniond& u) {
+    const double w = u.w(), x = u.x(), y = u.y(), z = u.z();
+    const double ww = w * w, xx = x * x, yy = y * y, zz = z * z;
+    const double s = 1.0 / (ww + xx + yy + zz), s2 = 2.0 * s;
+    Mat3 r;
+    r(0, 0) = (ww + xx - yy - zz) * s;
+    r(1, 1) = (ww - xx + yy - zz) * s;
+    r(2, 2) = (ww - xx - yy + zz) * s;
+    r(0, 1) = (x * y - w * z) * s2;
+    r(1, 0) = (x * y + w * z) * s2;
+    r(0, 2) = (x * z + w * y) * s2;
+    r(2, 0) = (x * z - w * y) * s2;
+    r(1, 2) = (y * z - w * x) * s2;
+    r(2, 1) = (y * z + w * x) * s2;
+    return r;
+  };
+  double previous2 = 1e300;
+  Mat3 r = rotation_of(q);
   for (int it = 0; it < max_iterations; ++it) {
     const Mat3 a = r.transpose() * F;
     const Vec3 g(a(2, 1) - a(1, 2), a(0, 2) - a(2, 0), a(1, 0) - a(0, 1));
     const double tr = a.trace();
-    // H = tr I − sym(A), by an unrolled 3×3 LDLᵀ; Newton step when positive definite.
+    // H = tr I − sym(A). Positive definite with all LDLᵀ pivots above the floor ⇔ the leading
+    // minors m1 = h00, m2, m3 = det H satisfy m1 > floor, m2 > floor·m1, m3 > floor·m2
+    // (the pivots are m1, m2/m1, m3/m2); then the Newton step ω = adj(H) g / det H.
     const double h00 = tr - a(0, 0), h11 = tr - a(1, 1), h22 = tr - a(2, 2);
     const double h10 = -0.5 * (a(1, 0) + a(0, 1)), h20 = -0.5 * (a(2, 0) + a(0, 2)),
                  h21 = -0.5 * (a(2, 1) + a(1, 2));
     const double pivot_floor = 1e-3 * std::abs(tr);
     Vec3 w;
     bool newton = false;
-    if (h00 > pivot_floor) {
-      const double i0 = 1.0 / h00;
-      const double l10 = h10 * i0, l20 = h20 * i0;
-      const double d1 = h11 - l10 * h10;
-      if (d1 > pivot_floor) {
-        const double i1 = 1.0 / d1;
-        const double l21 = (h21 - l20 * h10) * i1;
-        const double d2 = h22 - l20 * h20 - l21 * l21 * d1;
-        if (d2 > pivot_floor) {
-          // Solve L y = g, then D Lᵀ w = y.
-          const double y1 = g.y() - l10 * g.x();
-          const double y2 = g.z() - l20 * g.x() - l21 * y1;
-          w.z() = y2 / d2;
-          w.y() = y1 * i1 - l21 * w.z();
-          w.x() = g.x() * i0 - l10 * w.y() - l20 * w.z();
-          newton = w.squaredNorm() < 0.25;
-        }
-      }
+    const double c00 = h11 * h22 - h21 * h21, c01 = h20 * h21 - h10 * h22,
+                 c02 = h10 * h21 - h11 * h20, c11 = h00 * h22 - h20 * h20,
+                 c12 = h10 * h20 - h00 * h21, m2 = h00 * h11 - h10 * h10;
+    const double det = h00 * c00 + h10 * c01 + h20 * c02;
+    if (h00 > pivot_floor && m2 > pivot_floor * h00 && det > pivot_floor * m2) {
+      const double inv = 1.0 / det;
+      w.x() = (c00 * g.x() + c01 * g.y() + c02 * g.z()) * inv;
+      w.y() = (c01 * g.x() + c11 * g.y() + c12 * g.z()) * inv;
+      w.z() = (c02 * g.x() + c12 * g.y() + m2 * g.z()) * inv;
+      newton = w.squaredNorm() < 0.25;
     }
     if (!newton) w = g * (1.0 / (std::abs(tr) + 1e-300));
-    const double wn = w.norm();
-    if (wn < 1e-12 || (wn < 1e-8 && wn >= previous)) break;
-    previous = wn;
+    const double wn2 = w.squaredNorm();
+    if (wn2 < 1e-24 || (wn2 < 1e-16 && wn2 >= previous2)) break;
+    previous2 = wn2;
     if (newton) {
-      // exp of a short step: unit quaternion (1, ω/2) / norm (rotation angle
-      // 2 atan(|ω|/2) = |ω| + O(|ω|³), which keeps the quadratic convergence).
+      // exp of a short step: the quaternion (1, ω/2) (rotation angle 2 atan(|ω|/2) =
+      // |ω| + O(|ω|³), which keeps the quadratic convergence).
       q = q * Eigen::Quaterniond(1.0, 0.5 * w.x(), 0.5 * w.y(), 0.5 * w.z());
     } else {
+      const double wn = std::sqrt(wn2);
+      q.normalize();
       q = q * Eigen::Quaterniond(Eigen::AngleAxisd(wn, w / wn));
     }
-    q.normalize();
-    r = q.toRotationMatrix();
-    if (newton && wn < 1e-7) break;
+    r = rotation_of(q);
+    if (newton && wn2 < 1e-14) break;
   }
+  q.normalize();
   return r;
 }
 
