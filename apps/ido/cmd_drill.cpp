@@ -39,8 +39,8 @@ struct DrillOptions {
   std::string output;
   std::string surface;
   std::string report;
-  double min_size_mm = 0.0;
-  int max_depth = 6;
+  double min_size_mm = 0.0;         // 0: not given
+  std::optional<int> max_depth;     // absent with min_size_mm 0: leaves down to burr radius / 4
   std::string density_from;
   double force_threshold_n = 0.2;
   double removal_rate = 0.0;
@@ -60,15 +60,18 @@ void run(const DrillOptions& o, const GlobalOptions& /*g*/) {
     throw InvalidInput(fmt::format("{}: --surface must be .stl, .ply, .obj or .vtp", o.surface));
   }
   if (o.min_size_mm < 0.0) throw InvalidInput("--min-size must be positive");
-  if (o.max_depth < 0 || o.max_depth > drill::kMaxDepth) {
+  if (o.max_depth && (*o.max_depth < 0 || *o.max_depth > drill::kMaxDepth)) {
     throw InvalidInput(fmt::format("--max-depth must be between 0 and {}", drill::kMaxDepth));
   }
   drill::SimulatorOptions so;
   so.tool = drill::parse_tool(o.tool);
   so.erosion.force_threshold_n = o.force_threshold_n;
   so.erosion.removal_rate_mm3_per_s = o.removal_rate;
-  so.erosion.max_depth = o.max_depth;
+  if (o.max_depth) so.erosion.max_depth = *o.max_depth;
   so.erosion.min_size_mm = o.min_size_mm;
+  // Neither given: leaves a quarter of the burr radius across, fine enough for a smooth cut
+  // and independent of how coarse the input mesh is (a fixed depth is not).
+  if (!o.max_depth && o.min_size_mm == 0.0) so.erosion.min_size_mm = so.tool.burr_radius_mm / 4.0;
   so.coupling.stiffness_n_per_mm = o.stiffness;
   if (o.visit_budget >= 0) so.erosion.max_node_visits = static_cast<std::size_t>(o.visit_budget);
   SnapshotOptions picture;  // one camera for every picture, looking down at 50°
@@ -140,8 +143,8 @@ void setup(CLI::App& app, const GlobalOptions& g) {
   sub->add_option("-o,--output", opts->output, "Drilled mesh (.vtu): remaining leaf tetrahedra, depth and density")->required();
   sub->add_option("--surface", opts->surface, "Boundary surface (.stl, .ply, .vtp)");
   sub->add_option("--report", opts->report, "JSON report");
-  auto* min_size = sub->add_option("--min-size", opts->min_size_mm, "Finest leaf size (mm)");
-  auto* depth = sub->add_option("--max-depth", opts->max_depth, "Finest refinement level (default 6)");
+  auto* min_size = sub->add_option("--min-size", opts->min_size_mm, "Finest leaf size (mm; default a quarter of the burr radius)");
+  auto* depth = sub->add_option("--max-depth", opts->max_depth, "Finest refinement level (default: leaves down to a quarter of the burr radius)");
   min_size->excludes(depth);
   sub->add_option("--density-from", opts->density_from, "CT volume (HU) giving each root's density");
   sub->add_option("--force-threshold", opts->force_threshold_n, "Pressing force (N) above which the burr cuts (default 0.2)");

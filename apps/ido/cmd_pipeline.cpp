@@ -362,7 +362,10 @@ void run(const Options& o, const GlobalOptions& g) {
       lo = lo.cwiseMin(v);
       hi = hi.cwiseMax(v);
     }
-    pic.add_tet_mesh_clipped(tets, {.point = 0.5 * (lo + hi), .normal = Vec3(1, 0, 0)}, "");
+    viz::TetClipOptions clip_options;
+    clip_options.uniform_colour = Vec3(0.85, 0.8, 0.65);
+    clip_options.edges = true;
+    pic.add_tet_mesh_clipped(tets, {.point = 0.5 * (lo + hi), .normal = Vec3(1, 0, 0)}, "", clip_options);
     pic.set_camera(pic.fit_camera(90, 10));
     pic.write_png(dir / "tetmesh_clip.png");
     report["pictures"].push_back({{"file", "tetmesh_clip.png"}, {"what", "tetrahedral mesh, cut in half"}});

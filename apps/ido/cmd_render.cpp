@@ -34,6 +34,7 @@ struct RenderOptions {
   std::string clip;
   std::string window;
   bool ortho = false;
+  bool edges = false;
 };
 
 /// Parses "A,B" into two numbers; @throws ido::InvalidInput naming @p what.
@@ -118,7 +119,9 @@ void run(const RenderOptions& o, const GlobalOptions& g) {
         plane.normal = Vec3(1, 0, 0);
         plane.point = Vec3(max_x + 1.0, 0, 0);
       }
-      ren.add_tet_mesh_clipped(mesh, plane, o.field);
+      viz::TetClipOptions clip_options;
+      clip_options.edges = o.edges;
+      ren.add_tet_mesh_clipped(mesh, plane, o.field, clip_options);
       ++meshes;
     } else if (io::is_triangle_mesh_path(input)) {
       ren.add_surface(io::read_triangle_mesh(input), palette[std::size_t(surfaces) % palette.size()]);
@@ -167,6 +170,7 @@ void setup(CLI::App& app, const GlobalOptions& g) {
   sub->add_option("--clip", opts->clip, "Clip tetrahedral meshes: PX,PY,PZ:NX,NY,NZ (removes the normal's side)");
   sub->add_option("--window", opts->window, "Slice display window WIDTH,LEVEL (default: slice min..max)");
   sub->add_flag("--ortho", opts->ortho, "Orthographic instead of perspective camera");
+  sub->add_flag("--edges", opts->edges, "Draw the tetrahedra's edges on clipped tetrahedral meshes");
   sub->callback([opts, &g] { run(*opts, g); });
 }
 

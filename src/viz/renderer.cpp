@@ -10,6 +10,7 @@
 #include <csetjmp>
 #include <map>
 #include <mutex>
+#include <set>
 #include <string>
 
 #include "ido/core/atomic_file.h"
@@ -303,9 +304,12 @@ void Renderer::add_tet_mesh_clipped(const geometry::TetMesh& mesh, const ClipPla
       e.second = {i, tri};
     }
   }
+  std::set<std::pair<std::int32_t, std::int32_t>> edges;  // of the drawn faces, each once
   for (const auto& [key, e] : faces) {
     if (e.first != 1) continue;
     const auto [tet, tri] = e.second;
+    if (options.edges)
+      for (int k = 0; k < 3; ++k) edges.insert(std::minmax(tri[std::size_t(k)], tri[std::size_t((k + 1) % 3)]));
     Vec3 colour = options.uniform_colour;
     if (field) {
       const double x = field->values[tet * std::size_t(field->components)];
@@ -322,6 +326,9 @@ void Renderer::add_tet_mesh_clipped(const geometry::TetMesh& mesh, const ClipPla
     }
     m_two_sided.push_back(true);
   }
+  for (const auto& [a, b] : edges)
+    m_lines.push_back({to_f(mesh.vertices[std::size_t(a)]), to_f(mesh.vertices[std::size_t(b)]),
+                       to_f(options.edge_colour)});
 }
 
 void Renderer::add_slice(const image::Volume<float>& volume, int axis, std::int64_t index,
@@ -483,6 +490,11 @@ Image Renderer::render() const {
 
   // Triangles, lit on the CPU by a headlight: ambient + diffuse · |n · l| (two-sided) or
   // max(0, n · l) (one-sided), l pointing from the surface to the eye.
+  // Faces are pushed slightly back so that edge lines drawn on them win the depth test.
+  if (!m_lines.empty()) {
+    glEnable(GL_POLYGON_OFFSET_FILL);
+    glPolygonOffset(1.0f, 1.0f);
+  }
   glBegin(GL_TRIANGLES);
   for (std::size_t t = 0; t < m_two_sided.size(); ++t) {
     for (int k = 0; k < 3; ++k) {
@@ -498,6 +510,17 @@ Image Renderer::render() const {
     }
   }
   glEnd();
+  if (!m_lines.empty()) {
+    glDisable(GL_POLYGON_OFFSET_FILL);
+    glLineWidth(1.0f);
+    glBegin(GL_LINES);
+    for (const auto& line : m_lines) {
+      glColor3f(line[2][0], line[2][1], line[2][2]);
+      glVertex3f(line[0][0], line[0][1], line[0][2]);
+      glVertex3f(line[1][0], line[1][1], line[1][2]);
+    }
+    glEnd();
+  }
 
   // Slices: unlit textured quads, one texel per voxel.
   if (!m_slices.empty()) {

@@ -243,6 +243,54 @@ TEST(Renderer, ClipRemovesTheFarSide) {
   EXPECT_TRUE(test::near(lo.x(), 0.0, 1e-12));
 }
 
+// Edges drawn on a clipped mesh: looking straight at the cut face of a cube of 4 × 4 × 4
+// cells, every cell boundary line of the face carries edge pixels, and without the option
+// no pixel has the edge colour.
+TEST(Renderer, ClippedTetMeshEdgesMarkTheCellBoundaries) {
+  const auto mesh = geometry::box_tets(Vec3(0, 0, 0), Vec3(10, 10, 10), 4);
+  auto picture = [&](bool edges) {
+    Renderer ren(100, 100);
+    TetClipOptions options;
+    options.edges = edges;
+    options.edge_colour = Vec3(1, 0, 0);
+    options.uniform_colour = Vec3(0.5, 0.5, 0.5);
+    ren.add_tet_mesh_clipped(mesh, {.point = Vec3(0, 0, 5), .normal = Vec3(0, 0, 1)}, "", options);
+    Camera cam;
+    cam.projection = Projection::Orthographic;
+    cam.target = Vec3(5, 5, 5);
+    cam.direction = Vec3(0, 0, 1);
+    cam.up = Vec3(0, 1, 0);
+    cam.distance_mm = 50;
+    cam.near_mm = 1;
+    cam.far_mm = 200;
+    cam.half_height_mm = 5;  // 10 px per mm: cell boundaries at columns 25, 50, 75
+    ren.set_camera(cam);
+    return ren.render();
+  };
+  auto red = [](const Image& im, int x, int y) {
+    const auto* p = im.pixel(x, y);
+    return p[0] > 200 && p[1] < 60 && p[2] < 60;
+  };
+  const Image plain = picture(false), lined = picture(true);
+  int red_plain = 0, red_lined = 0;
+  for (int y = 0; y < 100; ++y)
+    for (int x = 0; x < 100; ++x) {
+      red_plain += red(plain, x, y);
+      red_lined += red(lined, x, y);
+    }
+  EXPECT_EQ(red_plain, 0);
+  EXPECT_LT(red_lined, 100 * 100 / 3) << "the faces stay visible between the edges";
+  for (int column : {25, 50, 75}) {
+    int hits = 0;
+    for (int y = 5; y < 95; ++y) hits += red(lined, column - 1, y) || red(lined, column, y);
+    EXPECT_GE(hits, 85) << "cell boundary at column " << column;
+  }
+  // A column in the middle of a cell meets only the diagonal edges of the cut face.
+  int middle = 0;
+  for (int y = 5; y < 95; ++y) middle += red(lined, 12, y);
+  EXPECT_LT(middle, 30);
+}
+
 TEST(Renderer, PngRoundTrip) {
   Renderer ren(64, 48);
   ren.add_surface(geometry::icosphere(Vec3::Zero(), 3, 2), Vec3(0.9, 0.6, 0.1));

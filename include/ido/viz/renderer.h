@@ -67,6 +67,9 @@ struct TetClipOptions {
   std::optional<double> range_min;
   std::optional<double> range_max;
   Vec3 uniform_colour = Vec3(0.8, 0.8, 0.8);  ///< used when no field is named
+  /// Draw the edges of the drawn faces as lines, so the tetrahedra can be told apart.
+  bool edges = false;
+  Vec3 edge_colour = Vec3(0.1, 0.1, 0.1);
 };
 
 /// Display window of a CT slice: grey = (value − (level − window/2)) / window, clamped.
@@ -162,6 +165,7 @@ class Renderer {
   int m_height;
   std::vector<Vertex> m_triangles;  // 3 per triangle, lit at render time
   std::vector<bool> m_two_sided;    // per triangle
+  std::vector<std::array<Eigen::Vector3f, 3>> m_lines;  // segment ends and colour, unlit
   std::vector<Slice> m_slices;
   std::optional<Camera> m_camera;
   Vec3 m_background = Vec3::Ones();
