@@ -47,6 +47,13 @@ double thread_cpu_s() {
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
+// CPU time of the whole process (s).
+double process_cpu_s() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
 double leaf_edge(int depth) { return kBlockCell * std::sqrt(3.0) / std::ldexp(1.0, depth); }
 
 // One collision update as the simulator's collision thread does it: collide the 1000 burr
@@ -61,7 +68,8 @@ void BM_UpdateTime(benchmark::State& state) {
   const auto surface_budget = static_cast<std::size_t>(state.range(3));
   std::vector<double> times;
   std::vector<double> cpu_times;
-  double bytes = 0.0, nodes = 0.0, storage = 0.0, removed = 0.0, faces = 0.0;
+  std::vector<double> collide_cpu, erode_cpu, surface_cpu;  // the three parts of cpu_times
+  double bytes = 0.0, nodes = 0.0, storage = 0.0, removed = 0.0, faces = 0.0, hash_bytes = 0.0;
   std::size_t backlog_updates = 0, max_queue = 0;
   for (auto _ : state) {
     TetHierarchy h(make_block(kBlock, kBlockCell));
@@ -71,6 +79,9 @@ void BM_UpdateTime(benchmark::State& state) {
     Eroder eroder({.force_threshold_n = 0.0, .removal_rate_mm3_per_s = 0.0, .max_depth = depth, .max_node_visits = budget});
     times.clear();
     cpu_times.clear();
+    collide_cpu.clear();
+    erode_cpu.clear();
+    surface_cpu.clear();
     backlog_updates = 0;
     max_queue = 0;
     Vec3 last = trace(0);
@@ -89,17 +100,24 @@ void BM_UpdateTime(benchmark::State& state) {
         ++backlog_updates;
       }
       max_queue = std::max(max_queue, eroder.queued());
+      const double c1 = thread_cpu_s();
       (void)eroder.run(h, budget);
+      const double c2 = thread_cpu_s();
       surface.update(h, eroder.changed_nodes(), surface_budget);
       eroder.clear_changed_roots();
       times.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-      cpu_times.push_back(thread_cpu_s() - c0);
+      const double c3 = thread_cpu_s();
+      cpu_times.push_back(c3 - c0);
+      collide_cpu.push_back(c1 - c0);
+      erode_cpu.push_back(c2 - c1);
+      surface_cpu.push_back(c3 - c2);
     }
     bytes = h.bytes_per_node();
     storage = static_cast<double>(h.node_storage_bytes());
     nodes = static_cast<double>(h.node_count());
     removed = before - h.material_volume();
     faces = static_cast<double>(surface.face_count());
+    hash_bytes = static_cast<double>(h.root_hash().memory_bytes());
   }
   const auto p = percentiles(times);
   state.counters["p50_ms"] = p.p50 * 1e3;
@@ -109,6 +127,18 @@ void BM_UpdateTime(benchmark::State& state) {
   state.counters["cpu_p50_ms"] = pc.p50 * 1e3;
   state.counters["cpu_p99_ms"] = pc.p99 * 1e3;
   state.counters["cpu_max_ms"] = pc.max * 1e3;
+  double total = 0.0;
+  for (const double t : cpu_times) total += t;
+  state.counters["cpu_total_s"] = total;  // all updates, backlog included
+  const auto pcol = percentiles(collide_cpu);
+  const auto pero = percentiles(erode_cpu);
+  const auto psur = percentiles(surface_cpu);
+  state.counters["collide_cpu_p50_ms"] = pcol.p50 * 1e3;
+  state.counters["collide_cpu_p99_ms"] = pcol.p99 * 1e3;
+  state.counters["erode_cpu_p50_ms"] = pero.p50 * 1e3;
+  state.counters["erode_cpu_p99_ms"] = pero.p99 * 1e3;
+  state.counters["surface_cpu_p50_ms"] = psur.p50 * 1e3;
+  state.counters["surface_cpu_p99_ms"] = psur.p99 * 1e3;
   state.counters["updates"] = static_cast<double>(times.size());
   state.counters["backlog_updates"] = static_cast<double>(backlog_updates);
   state.counters["max_queued"] = static_cast<double>(max_queue);
@@ -116,6 +146,9 @@ void BM_UpdateTime(benchmark::State& state) {
   state.counters["faces"] = faces;
   state.counters["bytes_per_node"] = bytes;
   state.counters["node_storage_kB"] = storage / 1024.0;
+  // Beyond the node words: the roots' spatial hash and the v_list faces (the surface).
+  state.counters["hash_kB"] = hash_bytes / 1024.0;
+  state.counters["v_list_kB"] = faces * static_cast<double>(sizeof(SurfaceFace)) / 1024.0;
   state.counters["nodes"] = nodes;
   state.counters["leaf_edge_mm"] = leaf_edge(depth);
 }
@@ -129,14 +162,17 @@ BENCHMARK(BM_UpdateTime)
     ->Args({5, 0, 3, 0})
     ->Args({6, 0, 3, 0})
     ->ArgsProduct({{4, 5, 6, 7, 8}, {6000}, {3}, {8000}})
-    ->ArgsProduct({{5, 6}, {3000}, {3}, {4000}})
+    ->ArgsProduct({{5, 6, 7}, {3000}, {3}, {4000}})
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond);
 
-// The haptic loop over a scripted trace through the three threads.
+// The haptic loop over a scripted trace through the three threads. Args: seconds, hybrid
+// wait spin (µs; 0 = plain sleep_until).
 void BM_HapticLoop(benchmark::State& state) {
   const double seconds = static_cast<double>(state.range(0));
+  const double spin_s = 1e-6 * static_cast<double>(state.range(1));
   SessionStats st;
+  const double cpu0 = process_cpu_s();
   for (auto _ : state) {
     TetHierarchy h(make_block(kBlock, kBlockCell));
     std::vector<double> t;
@@ -153,6 +189,7 @@ void BM_HapticLoop(benchmark::State& state) {
     SimulatorOptions o;
     o.tool.burr_radius_mm = kRadius;
     o.erosion = {.force_threshold_n = 0.2, .removal_rate_mm3_per_s = 30.0, .max_depth = 6};
+    o.haptic_spin_s = spin_s;
     Simulator sim(h, device, o);
     sim.run(seconds + 30.0);
     st = sim.stats();
@@ -173,8 +210,9 @@ void BM_HapticLoop(benchmark::State& state) {
   state.counters["removed_mm3"] = st.removed_volume_mm3;
   state.counters["backlog_max"] = static_cast<double>(st.erosion_backlog_max);
   state.counters["collision_updates"] = static_cast<double>(st.collision_updates);
+  state.counters["process_cpu_s"] = process_cpu_s() - cpu0;  // all threads, incl. the spin
 }
-BENCHMARK(BM_HapticLoop)->Arg(10)->Arg(60)->Iterations(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_HapticLoop)->ArgsProduct({{10, 60}, {0, 150}})->Iterations(1)->Unit(benchmark::kMillisecond);
 
 #ifdef IDO_BENCH_OPENVDB
 // Voxel removal in OpenVDB on the same trace: voxels of edge = leaf edge at `depth`; per
@@ -185,6 +223,7 @@ void BM_OpenVdbUpdateTime(benchmark::State& state) {
   const int depth = static_cast<int>(state.range(0));
   const double h = leaf_edge(depth) / std::sqrt(3.0) * std::sqrt(2.0);  // voxel edge ~ leaf mean edge
   std::vector<double> times;
+  std::vector<double> cpu_times;
   double mem = 0.0;
   for (auto _ : state) {
     auto grid = openvdb::BoolGrid::create(false);
@@ -196,9 +235,11 @@ void BM_OpenVdbUpdateTime(benchmark::State& state) {
     const Tool tool({.burr_radius_mm = kRadius, .sample_count = 1000});
     auto acc = grid->getAccessor();
     times.clear();
+    cpu_times.clear();
     Vec3 last = trace(0);
     for (int i = 0; i < kUpdates; ++i) {
       const auto t0 = std::chrono::steady_clock::now();
+      const double c0 = thread_cpu_s();
       const Vec3 c = trace(i);
       int inside = 0;
       for (const auto& s : tool.burr_samples()) {
@@ -225,6 +266,7 @@ void BM_OpenVdbUpdateTime(benchmark::State& state) {
       }
       last = c;
       times.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+      cpu_times.push_back(thread_cpu_s() - c0);
     }
     mem = static_cast<double>(grid->memUsage());
   }
@@ -232,6 +274,13 @@ void BM_OpenVdbUpdateTime(benchmark::State& state) {
   state.counters["p50_ms"] = p.p50 * 1e3;
   state.counters["p99_ms"] = p.p99 * 1e3;
   state.counters["max_ms"] = p.max * 1e3;
+  const auto pc = percentiles(cpu_times);
+  state.counters["cpu_p50_ms"] = pc.p50 * 1e3;
+  state.counters["cpu_p99_ms"] = pc.p99 * 1e3;
+  state.counters["cpu_max_ms"] = pc.max * 1e3;
+  double total = 0.0;
+  for (const double t : cpu_times) total += t;
+  state.counters["cpu_total_s"] = total;
   state.counters["memory_kB"] = mem / 1024.0;
   state.counters["voxel_mm"] = h;
 }

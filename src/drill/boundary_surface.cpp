@@ -138,8 +138,13 @@ struct ChildFaceTable {
   }
 };
 
-bool find_child_face(int g, const std::array<int, 3>& codes, int& child, int& child_face, std::array<int, 3>& local) {
+const ChildFaceTable& child_face_table() {
   static const ChildFaceTable table;
+  return table;
+}
+
+bool find_child_face(const ChildFaceTable& table, int g, const std::array<int, 3>& codes, int& child, int& child_face,
+                     std::array<int, 3>& local) {
   if (g < 0 || g > 3) return false;
   for (const int c : codes)
     if (c < 0 || c > 15) return false;
@@ -149,6 +154,10 @@ bool find_child_face(int g, const std::array<int, 3>& codes, int& child, int& ch
   child_face = x.child_face;
   for (std::size_t i = 0; i < 3; ++i) local[i] = x.local[i];
   return true;
+}
+
+bool find_child_face(int g, const std::array<int, 3>& codes, int& child, int& child_face, std::array<int, 3>& local) {
+  return find_child_face(child_face_table(), g, codes, child, child_face, local);
 }
 
 }  // namespace
@@ -193,21 +202,37 @@ Across root_across(const TetHierarchy& h, std::uint32_t r, int f) {
   return a;
 }
 
+// The tables the v_list walk reads for every node, fetched once per walk (each accessor
+// is a function-local static).
+struct WalkTables {
+  const TreeTable& tree = TreeTable::get();
+  const std::array<std::array<std::array<int, 4>, 4>, 8>& sibling = sibling_map();
+  const ChildFaceTable& child_face = child_face_table();
+};
+
 // What lies across face f of child slot s of the internal node p (storage word pword),
-// given what lies across each face of p (`pacr`).
-Across child_across(const TetHierarchy& h, const NodeRef& p, std::uint32_t pword, int s, int f,
-                    const std::array<Across, 4>& pacr) {
-  const TreeTable& t = TreeTable::get();
+// given what lies across each face of p (`pacr`); written into @p out field by field (a
+// returned temporary, built piecewise on the stack and copied, cost a store-forwarding
+// stall per call in the walk's inner loop).
+void child_across(const TetHierarchy& h, const WalkTables& wt, const NodeRef& p, std::uint32_t pword, int s, int f,
+                  const std::array<Across, 4>& pacr, Across& out) {
+  const TreeTable& t = wt.tree;
   const auto su = static_cast<std::size_t>(s);
   const auto link = t.face_link[su][static_cast<std::size_t>(f)];
   if (link.sibling >= 0) {
-    return Across{false, p.child(link.sibling), link.sibling_face, sibling_map()[su][static_cast<std::size_t>(f)],
-                  h.child_word(pword, link.sibling)};
+    out.boundary = false;
+    out.node = p.child(link.sibling);
+    out.face = link.sibling_face;
+    out.vmap = wt.sibling[su][static_cast<std::size_t>(f)];
+    out.word = h.child_word(pword, link.sibling);
+    return;
   }
   const auto pf = static_cast<std::size_t>(link.parent_face);
   const Across& pa = pacr[pf];
-  if (pa.boundary) return pa;
-  if (pa.node.depth < p.depth || TetHierarchy::state_of_word(pa.word) != NodeState::Internal) return pa;  // a coarser leaf
+  if (pa.boundary || pa.node.depth < p.depth || TetHierarchy::state_of_word(pa.word) != NodeState::Internal) {
+    out = pa;  // the mesh boundary or a coarser leaf
+    return;
+  }
   // Same depth as the parent and refined: the child of pa.node holding our face.
   std::array<int, 3> codes{};
   std::array<std::size_t, 3> ks{};
@@ -219,11 +244,16 @@ Across child_across(const TetHierarchy& h, const NodeRef& p, std::uint32_t pword
   }
   int c = -1, cg = -1;
   std::array<int, 3> local{};
-  if (!find_child_face(pa.face, codes, c, cg, local)) return {true, {}, -1, {}};  // non-conforming input
-  Across a{false, pa.node.child(c), cg, {-1, -1, -1, -1}};
-  for (std::size_t j = 0; j < 3; ++j) a.vmap[ks[j]] = local[j];
-  a.word = h.child_word(pa.word, c);
-  return a;
+  if (!find_child_face(wt.child_face, pa.face, codes, c, cg, local)) {  // non-conforming input
+    out = Across{true, {}, -1, {}};
+    return;
+  }
+  out.boundary = false;
+  out.node = pa.node.child(c);
+  out.face = cg;
+  out.vmap = {-1, -1, -1, -1};
+  for (std::size_t j = 0; j < 3; ++j) out.vmap[ks[j]] = local[j];
+  out.word = h.child_word(pa.word, c);
 }
 
 // What lies across face f of child slot s of node p when every node is taken as refined:
@@ -314,47 +344,82 @@ Vec3 point_position(const PointKey& key, std::span<const Vec3> vertices_mm) noex
 
 namespace {
 
-// Emits the visible faces of the full leaves of the subtree of n (storage word `word`,
-// face neighbours acr), walking top-down so every node's neighbours and their states come
-// from its parent's in O(1).
-// NOLINTNEXTLINE(misc-no-recursion): depth ≤ kMaxDepth
-void visit(const TetHierarchy& h, std::size_t r, const NodeRef& n, std::uint32_t word, const std::array<Across, 4>& acr,
-           std::vector<SurfaceFace>& out, std::size_t& visits) {
-  ++visits;
-  const NodeState st = TetHierarchy::state_of_word(word);
-  if (st == NodeState::Erased) return;
-  if (st == NodeState::Internal) {
-    for (int c = 0; c < 8; ++c) {
-      std::array<Across, 4> cacr;
-      for (int f = 0; f < 4; ++f) cacr[static_cast<std::size_t>(f)] = child_across(h, n, word, c, f, acr);
-      visit(h, r, n.child(c), h.child_word(word, c), cacr, out, visits);
-    }
-    return;
+// Geometry of child slot @p s of a node of geometry @p g: the same integer midpoints and
+// parity as TetHierarchy::geometry derives along the path, one level at a time.
+NodeGeometry child_geometry(const TreeTable& t, const NodeGeometry& g, std::size_t s) noexcept {
+  NodeGeometry c;
+  for (std::size_t k = 0; k < 4; ++k) {
+    const auto& a = g.vertex[t.vertex[s][k][0]];
+    const auto& b = g.vertex[t.vertex[s][k][1]];
+    for (std::size_t j = 0; j < 4; ++j) c.vertex[k][j] = (a[j] + b[j]) / 2;
   }
-  NodeGeometry g;
-  bool have_geometry = false;
+  c.flipped = g.flipped != (t.parity[s] != 0);
+  return c;
+}
+
+// Emits the visible faces of the full leaf of geometry g (face neighbours acr). Point keys
+// are made once per vertex, on first use.
+void emit_leaf(const TetHierarchy& h, std::size_t r, const NodeGeometry& g, const std::array<Across, 4>& acr,
+               std::vector<SurfaceFace>& out) {
+  std::array<PointKey, 4> vkey;
+  std::uint8_t have_key = 0;
   for (int f = 0; f < 4; ++f) {
     const auto fu = static_cast<std::size_t>(f);
     const Across& a = acr[fu];
     const NodeState other = TetHierarchy::state_of_word(a.word);
     if (other == NodeState::Full) continue;
-    if (!have_geometry) {
-      g = h.geometry(n);
-      have_geometry = true;
-    }
     std::array<int, 3> order{kFaceVerts[f][0], kFaceVerts[f][1], kFaceVerts[f][2]};
     if (g.flipped) std::swap(order[1], order[2]);
     std::array<PointKey, 3> keys;
     std::array<int, 3> loc{};
     for (std::size_t i = 0; i < 3; ++i) {
-      keys[i] = point_key(h, r, g.vertex[static_cast<std::size_t>(order[i])]);
-      loc[i] = a.vmap[static_cast<std::size_t>(order[i])];
+      const auto v = static_cast<std::size_t>(order[i]);
+      if (((have_key >> v) & 1U) == 0) {
+        vkey[v] = point_key(h, r, g.vertex[v]);
+        have_key = static_cast<std::uint8_t>(have_key | (1U << v));
+      }
+      keys[i] = vkey[v];
+      loc[i] = a.vmap[v];
     }
     if (other == NodeState::Erased) {
       out.push_back(keys);
     } else {
       emit_against(h, keys, loc, a.node, a.word, a.face, out);
     }
+  }
+}
+
+// Emits the visible faces of the full leaves of the subtree of n (storage word `word`,
+// geometry g, face neighbours acr), walking top-down so every node's neighbours, their
+// states and its geometry come from its parent's in O(1). Erased children and full
+// children with four full neighbours cost one visit each and no further work.
+// NOLINTNEXTLINE(misc-no-recursion): depth ≤ kMaxDepth
+void visit(const TetHierarchy& h, const WalkTables& wt, std::size_t r, const NodeRef& n, std::uint32_t word,
+           const NodeGeometry& g, const std::array<Across, 4>& acr, std::vector<SurfaceFace>& out, std::size_t& visits) {
+  ++visits;
+  const NodeState st = TetHierarchy::state_of_word(word);
+  if (st == NodeState::Erased) return;
+  if (st == NodeState::Full) {
+    emit_leaf(h, r, g, acr, out);
+    return;
+  }
+  for (int c = 0; c < 8; ++c) {
+    const std::uint32_t cw = h.child_word(word, c);
+    if (cw == TetHierarchy::kErased) {
+      ++visits;
+      continue;
+    }
+    std::array<Across, 4> cacr;
+    for (int f = 0; f < 4; ++f) child_across(h, wt, n, word, c, f, acr, cacr[static_cast<std::size_t>(f)]);
+    const auto cu = static_cast<std::size_t>(c);
+    if (cw == TetHierarchy::kFull) {
+      ++visits;
+      bool exposed = false;
+      for (const Across& a : cacr) exposed = exposed || a.word != TetHierarchy::kFull;
+      if (exposed) emit_leaf(h, r, child_geometry(wt.tree, g, cu), cacr, out);
+      continue;
+    }
+    visit(h, wt, r, n.child(c), cw, child_geometry(wt.tree, g, cu), cacr, out, visits);
   }
 }
 
@@ -592,6 +657,7 @@ std::uint32_t BoundarySurface::rebuild_range(const TetHierarchy& h, std::uint32_
   }
   hi = std::min<std::uint32_t>(hi, static_cast<std::uint32_t>(ch.size()));
   const std::array<Across, 4> racr = root_acr(h, r);
+  const WalkTables wt;
   std::uint32_t c = lo;
   while (c < hi) {
     NodeRef node{r, 0, 0};
@@ -601,7 +667,7 @@ std::uint32_t BoundarySurface::rebuild_range(const TetHierarchy& h, std::uint32_
     while (d < level && TetHierarchy::state_of_word(word) == NodeState::Internal) {
       const int s = static_cast<int>((c >> (3 * (level - d - 1))) & 7U);
       std::array<Across, 4> cacr;
-      for (int f = 0; f < 4; ++f) cacr[static_cast<std::size_t>(f)] = child_across(h, node, word, s, f, acr);
+      for (int f = 0; f < 4; ++f) child_across(h, wt, node, word, s, f, acr, cacr[static_cast<std::size_t>(f)]);
       node = node.child(s);
       word = h.child_word(word, s);
       acr = cacr;
@@ -611,7 +677,7 @@ std::uint32_t BoundarySurface::rebuild_range(const TetHierarchy& h, std::uint32_
     const std::uint32_t ulo = c & ~(span - 1U);
     auto& out = ch[ulo];
     out.clear();
-    visit(h, r, node, word, acr, out, m_visits);
+    visit(h, wt, r, node, word, h.geometry(node), acr, out, m_visits);
     m_rebuilt_chunks.push_back({r, ulo});
     for (std::uint32_t k = ulo + 1; k < ulo + span; ++k) {
       if (ch[k].empty()) continue;

@@ -12,7 +12,8 @@ namespace ido::drill {
 namespace {
 
 // True when the sphere (c, r) cannot touch the tetrahedron x: outside the bounding sphere
-// of the vertices or entirely beyond one face plane.
+// of the vertices or entirely beyond one face plane. The plane test compares squares
+// (n·(c − a))² > r² |n|² on the outer side, so no square root or division per face.
 bool sphere_misses_tet(const std::array<Vec3, 4>& x, const Vec3& c, double r) {
   const Vec3 centroid = 0.25 * (x[0] + x[1] + x[2] + x[3]);
   double rad2 = 0.0;
@@ -20,16 +21,17 @@ bool sphere_misses_tet(const std::array<Vec3, 4>& x, const Vec3& c, double r) {
   const double reach = r + std::sqrt(rad2);
   const double d2 = (c - centroid).squaredNorm();
   if (d2 > reach * reach) return true;
-  if (d2 <= r * r) return false;  // the centroid is inside the sphere
+  const double r2 = r * r;
+  if (d2 <= r2) return false;  // the centroid is inside the sphere
   static constexpr int kFace[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
   for (int f = 0; f < 4; ++f) {
     const Vec3& a = x[static_cast<std::size_t>(kFace[f][0])];
-    Vec3 n = (x[static_cast<std::size_t>(kFace[f][1])] - a).cross(x[static_cast<std::size_t>(kFace[f][2])] - a);
-    // Orient n away from the opposite vertex.
-    if (n.dot(x[static_cast<std::size_t>(f)] - a) > 0.0) n = -n;
-    const double len = n.norm();
-    if (len <= 0.0) continue;
-    if (n.dot(c - a) / len > r) return true;
+    const Vec3 n = (x[static_cast<std::size_t>(kFace[f][1])] - a).cross(x[static_cast<std::size_t>(kFace[f][2])] - a);
+    const double len2 = n.squaredNorm();
+    if (len2 <= 0.0) continue;
+    const double dc = n.dot(c - a);
+    // The centre is on the side away from the opposite vertex, farther than r.
+    if (dc * n.dot(x[static_cast<std::size_t>(f)] - a) < 0.0 && dc * dc > r2 * len2) return true;
   }
   return false;
 }
@@ -54,6 +56,15 @@ bool would_remove(const std::array<Vec3, 4>& x, int depth, int finest, const Vec
     if (would_remove(ch, depth + 1, finest, c, r, visits)) return true;
   }
   return false;
+}
+
+// Storage word of @p n, walked down from its root (the word of the leaf above it when it
+// lies below a leaf).
+std::uint32_t node_word(const TetHierarchy& h, const NodeRef& n) noexcept {
+  std::uint32_t w = h.root_word(n.root);
+  for (int level = 1; level <= n.depth && TetHierarchy::state_of_word(w) == NodeState::Internal; ++level)
+    w = h.child_word(w, n.slot(level));
+  return w;
 }
 
 }  // namespace
@@ -102,10 +113,11 @@ void Eroder::mark(const NodeRef& node, std::uint8_t faces) {
 // Steps 1–5 of processing a node for the current sphere: returns Done when the node needs
 // nothing more (missed, erased, removed, or left whole), Pushed when it is partly covered and
 // its children are to be processed (a frame was pushed), Abort when the volume budget ran out.
-Eroder::Enter Eroder::enter(TetHierarchy& h, const NodeRef& node, const std::array<Vec3, 4>& x, int finest,
-                            const std::array<std::int8_t, 4>& root_face, ErosionStats& stats) {
+// @p word is the node's storage word, read from its parent's frame (no walk from the root).
+Eroder::Enter Eroder::enter(TetHierarchy& h, const NodeRef& node, std::uint32_t word, const std::array<Vec3, 4>& x,
+                            int finest, const std::array<std::int8_t, 4>& root_face, ErosionStats& stats) {
   ++m_visits;
-  const NodeState st = h.state(node);
+  const NodeState st = TetHierarchy::state_of_word(word);
   if (st == NodeState::Erased) return Enter::Done;
   if (sphere_misses_tet(x, m_centre, m_radius)) return Enter::Done;
   const double r2 = m_radius * m_radius;
@@ -125,15 +137,19 @@ Eroder::Enter Eroder::enter(TetHierarchy& h, const NodeRef& node, const std::arr
       material = h.node_volume(node);
     } else {
       // Internal node entirely inside: its full descendants' volume.
-      std::array<NodeRef, 8 * (kMaxDepth + 1)> stack{};
+      struct Item {
+        NodeRef node;
+        std::uint32_t word;
+      };
+      std::array<Item, 8 * (kMaxDepth + 1)> stack{};
       int top = 0;
-      stack[static_cast<std::size_t>(top++)] = node;
+      stack[static_cast<std::size_t>(top++)] = {node, word};
       while (top > 0) {
-        const NodeRef n = stack[static_cast<std::size_t>(--top)];
-        const NodeState s = h.state(n);
-        if (s == NodeState::Full) material += h.node_volume(n);
+        const Item it = stack[static_cast<std::size_t>(--top)];
+        const NodeState s = TetHierarchy::state_of_word(it.word);
+        if (s == NodeState::Full) material += h.node_volume(it.node);
         if (s == NodeState::Internal)
-          for (int c = 0; c < 8; ++c) stack[static_cast<std::size_t>(top++)] = n.child(c);
+          for (int c = 0; c < 8; ++c) stack[static_cast<std::size_t>(top++)] = {it.node.child(c), h.child_word(it.word, c)};
       }
     }
     if (!pay(material * h.density(node.root))) {
@@ -158,11 +174,12 @@ Eroder::Enter Eroder::enter(TetHierarchy& h, const NodeRef& node, const std::arr
     // go stays a leaf.
     if (node.depth >= kMaxDepth || !would_remove(x, node.depth, finest, m_centre, m_radius, m_visits)) return Enter::Done;
     if (!h.refine(node)) return Enter::Done;
+    word = node_word(h, node);  // its new children's block
     refined_here = true;
     ++stats.nodes_refined;
     mark(node, face_mask);
   }
-  m_stack.push_back(Frame{node, x, root_face, static_cast<std::int8_t>(finest), 0, refined_here, face_mask});
+  m_stack.push_back(Frame{node, word, x, root_face, static_cast<std::int8_t>(finest), 0, refined_here, face_mask});
   return Enter::Pushed;
 }
 
@@ -253,8 +270,15 @@ ErosionStats Eroder::run(TetHierarchy& hierarchy, std::size_t max_node_visits) {
   if (m_active && !m_stack.empty()) {
     // Resuming: geometry may have moved (set_vertex_positions) and is derived again; frames
     // whose node is no longer internal are dropped.
+    // Each frame's node is a child of the one below it: words are re-read top-down.
     std::size_t keep = 0;
-    while (keep < m_stack.size() && hierarchy.state(m_stack[keep].node) == NodeState::Internal) ++keep;
+    for (; keep < m_stack.size(); ++keep) {
+      Frame& f = m_stack[keep];
+      const std::uint32_t w =
+          keep == 0 ? node_word(hierarchy, f.node) : hierarchy.child_word(m_stack[keep - 1].word, f.node.slot(f.node.depth));
+      if (TetHierarchy::state_of_word(w) != NodeState::Internal) break;
+      f.word = w;
+    }
     m_stack.resize(keep);
     for (auto& f : m_stack) {
       f.x = hierarchy.world_vertices(f.node);
@@ -297,11 +321,16 @@ ErosionStats Eroder::run(TetHierarchy& hierarchy, std::size_t max_node_visits) {
         }
         const NodeRef child = f.node.child(static_cast<int>(s));
         const int finest = f.finest;
-        e = enter(hierarchy, child, c, finest, crf, stats);  // may push (invalidates f)
+        // f.word stays readable for the rest of its children: its block is freed only when all
+        // 8 children are erased (merge), which leaves the slots after the current one reading
+        // kErased, and nothing is refined (no block reused) until the frame is done.
+        const std::uint32_t cw = hierarchy.child_word(f.word, static_cast<int>(s));
+        e = enter(hierarchy, child, cw, c, finest, crf, stats);  // may push (invalidates f)
       } else if (m_next_candidate < m_candidates.size()) {
         const std::uint32_t r = m_candidates[m_next_candidate++];
         const NodeRef root{r, 0, 0};
-        e = enter(hierarchy, root, hierarchy.world_vertices(root), finest_level(hierarchy, r), {0, 1, 2, 3}, stats);
+        e = enter(hierarchy, root, hierarchy.root_word(r), hierarchy.world_vertices(root), finest_level(hierarchy, r),
+                  {0, 1, 2, 3}, stats);
       } else {
         break;  // this sphere is done
       }

@@ -4,10 +4,26 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <thread>
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#endif
 
 #include "ido/core/error.h"
 
 namespace ido::drill {
+namespace {
+
+// Spin-wait hint: lets the core's other hardware thread run and saves power while spinning.
+void cpu_relax() noexcept {
+#if defined(__x86_64__) || defined(__i386__)
+  _mm_pause();
+#else
+  std::this_thread::yield();
+#endif
+}
+
+}  // namespace
 
 Percentiles percentiles(std::vector<double> v) {
   Percentiles p;
@@ -35,6 +51,9 @@ Simulator::Simulator(TetHierarchy& hierarchy, HapticDevice& device, const Simula
       m_coupling(options.coupling) {
   if (!(options.haptic_period_s > 0.0) || !std::isfinite(options.haptic_period_s)) {
     throw InvalidInput("simulator: haptic period must be positive");
+  }
+  if (!(options.haptic_spin_s >= 0.0) || !(options.haptic_spin_s < options.haptic_period_s)) {
+    throw InvalidInput("simulator: haptic spin time must be at least 0 and shorter than the haptic period");
   }
   m_render_lists = m_surface.v_lists();
   m_render_chunks.resize(hierarchy.root_count());
@@ -123,6 +142,7 @@ void Simulator::run(double timeout_s) {
 void Simulator::haptic_loop() {
   using clock = std::chrono::steady_clock;
   const auto period = std::chrono::nanoseconds(static_cast<std::int64_t>(m_options.haptic_period_s * 1e9));
+  const auto spin = std::chrono::nanoseconds(static_cast<std::int64_t>(m_options.haptic_spin_s * 1e9));
   auto next = clock::now();
   double prev_start = -1.0;
   std::uint64_t seq = 0;
@@ -159,7 +179,13 @@ void Simulator::haptic_loop() {
     if (m_device.finished(t0) && m_collision_done.load(std::memory_order_acquire)) {
       m_finished.store(true, std::memory_order_release);
     }
-    std::this_thread::sleep_until(next);
+    // Hybrid wait: sleep until spin before the tick, then spin on the clock up to it.
+    if (spin.count() > 0) {
+      if (clock::now() < next - spin) std::this_thread::sleep_until(next - spin);
+      while (clock::now() < next) cpu_relax();
+    } else {
+      std::this_thread::sleep_until(next);
+    }
   }
 }
 

@@ -56,6 +56,12 @@ double worst_descendant_quality(const std::array<Vec3, 4>& x) {
   return worst;
 }
 
+// Boxes are grown by this fraction of the root's longest edge (the mesh box: of its
+// diagonal) before a point is rejected by them. A point beyond a root's box by δ has a
+// barycentric coordinate below −δ / (4 · longest edge) = −2.5e-10 here, far below the −1e-12
+// slack locate() accepts, so a box rejection never drops a root the barycentric test takes.
+constexpr double kBoxSlack = 1e-9;
+
 constexpr int kEvenPermutations[12][4] = {{0, 1, 2, 3}, {0, 2, 3, 1}, {0, 3, 1, 2}, {1, 0, 3, 2},
                                           {1, 2, 0, 3}, {1, 3, 2, 0}, {2, 0, 1, 3}, {2, 1, 3, 0},
                                           {2, 3, 0, 1}, {3, 0, 2, 1}, {3, 1, 0, 2}, {3, 2, 1, 0}};
@@ -167,7 +173,13 @@ void TetHierarchy::update_root_geometry() {
     m_root_diameter[r] = diam;
     m_root_box[r] = box;
     m_total_volume += vol;
+    if (r == 0) m_mesh_box = box;
+    m_mesh_box.lo = m_mesh_box.lo.cwiseMin(box.lo);
+    m_mesh_box.hi = m_mesh_box.hi.cwiseMax(box.hi);
   }
+  const Vec3 slack = Vec3::Constant(kBoxSlack * (m_mesh_box.hi - m_mesh_box.lo).norm());
+  m_mesh_box.lo -= slack;
+  m_mesh_box.hi += slack;
   m_hash = geometry::SpatialHash(m_root_box, m_hash_cell);
 }
 
@@ -327,12 +339,24 @@ std::array<double, 4> TetHierarchy::root_barycentric(std::size_t r, const Vec3& 
   return {1.0 - l.x() - l.y() - l.z(), l.x(), l.y(), l.z()};
 }
 
+bool TetHierarchy::outside_root_box(std::size_t r, const Vec3& p_mm) const noexcept {
+  const geometry::Box3& b = m_root_box[r];
+  const double slack = kBoxSlack * m_root_diameter[r];
+  return p_mm.x() < b.lo.x() - slack || p_mm.y() < b.lo.y() - slack || p_mm.z() < b.lo.z() - slack ||
+         p_mm.x() > b.hi.x() + slack || p_mm.y() > b.hi.y() + slack || p_mm.z() > b.hi.z() + slack;
+}
+
 Location TetHierarchy::locate(const Vec3& p_mm) const noexcept {
   Location loc;
+  // Cheap rejections before any barycentric test: a point outside the mesh's box (air
+  // beyond the block) needs no hash look-up, and a candidate root whose box does not hold
+  // the point cannot hold it.
+  if ((p_mm.array() < m_mesh_box.lo.array()).any() || (p_mm.array() > m_mesh_box.hi.array()).any()) return loc;
   std::int32_t best_root = -1;
   double best_min = -1e-12;
   std::array<double, 4> best_lambda{};
   for (const std::int32_t r : m_hash.candidates(p_mm)) {
+    if (outside_root_box(static_cast<std::size_t>(r), p_mm)) continue;
     const auto lambda = root_barycentric(static_cast<std::size_t>(r), p_mm);
     const double m = std::min(std::min(lambda[0], lambda[1]), std::min(lambda[2], lambda[3]));
     if (m >= best_min) {

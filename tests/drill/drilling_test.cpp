@@ -1,10 +1,12 @@
 // SPDX-License-Identifier: Apache-2.0
 // Collision, force, erosion and boundary-surface properties.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <map>
 #include <unordered_map>
 #include <random>
+#include <tuple>
 
 #include <gtest/gtest.h>
 
@@ -163,6 +165,191 @@ TEST(BoundarySurface, ClosedAndEnclosesTheLeafVolumeAfterRandomDrilling) {
     // Incremental v_lists equal a full rebuild.
     const BoundarySurface fresh(h);
     for (std::size_t r = 0; r < h.root_count(); ++r) ASSERT_TRUE(fresh.v_list(r) == surface.v_list(r));
+  }
+}
+
+// Reference v_list by point location, independent of the top-down walk: a face of a full
+// leaf at depth d is probed just outside its centroid; outside the mesh or an erased leaf no
+// deeper than d → the face is visible; a full leaf no deeper than d → hidden; a deeper leaf
+// → the node across is refined: split the face at its edge midpoints and probe the four
+// parts at depth d + 1. Faces are oriented outward from their vertex positions.
+using FaceKeys = std::array<PointKey, 3>;
+
+bool key_less(const PointKey& a, const PointKey& b) { return std::tie(a.id, a.weight) < std::tie(b.id, b.weight); }
+
+FaceKeys canonical(FaceKeys f) {
+  while (key_less(f[1], f[0]) || key_less(f[2], f[0])) std::rotate(f.begin(), f.begin() + 1, f.end());
+  return f;
+}
+
+bool face_less(const FaceKeys& a, const FaceKeys& b) {
+  for (std::size_t i = 0; i < 3; ++i) {
+    if (key_less(a[i], b[i])) return true;
+    if (key_less(b[i], a[i])) return false;
+  }
+  return false;
+}
+
+void reference_faces(const TetHierarchy& h, std::size_t r, const std::array<BaryKey, 3>& tri, int depth, const Vec3& normal,
+                     std::vector<FaceKeys>& out) {
+  const Vec3 centroid = (h.world_position(r, tri[0]) + h.world_position(r, tri[1]) + h.world_position(r, tri[2])) / 3.0;
+  const Location loc = h.locate(centroid + 1e-7 * normal);
+  const bool erased = !loc.inside_mesh || loc.state == NodeState::Erased;
+  if (!loc.inside_mesh || loc.leaf.depth <= depth) {
+    if (erased) out.push_back(canonical({point_key(h, r, tri[0]), point_key(h, r, tri[1]), point_key(h, r, tri[2])}));
+    return;
+  }
+  auto mid = [](const BaryKey& a, const BaryKey& b) {
+    BaryKey m{};
+    for (std::size_t j = 0; j < 4; ++j) m[j] = (a[j] + b[j]) / 2;
+    return m;
+  };
+  const BaryKey ab = mid(tri[0], tri[1]), bc = mid(tri[1], tri[2]), ca = mid(tri[2], tri[0]);
+  for (const auto& sub : {std::array<BaryKey, 3>{tri[0], ab, ca}, std::array<BaryKey, 3>{ab, tri[1], bc},
+                          std::array<BaryKey, 3>{ca, bc, tri[2]}, std::array<BaryKey, 3>{ab, bc, ca}})
+    reference_faces(h, r, sub, depth + 1, normal, out);
+}
+
+std::vector<FaceKeys> reference_v_list(const TetHierarchy& h, std::size_t r) {
+  std::vector<FaceKeys> out;
+  h.for_each_leaf(r, [&](const NodeRef& n, NodeState st) {
+    if (st != NodeState::Full) return;
+    const NodeGeometry g = h.geometry(n);
+    for (std::size_t f = 0; f < 4; ++f) {
+      std::array<BaryKey, 3> tri{};
+      std::size_t k = 0;
+      for (std::size_t v = 0; v < 4; ++v)
+        if (v != f) tri[k++] = g.vertex[v];
+      const Vec3 a = h.world_position(r, tri[0]), b = h.world_position(r, tri[1]), c = h.world_position(r, tri[2]);
+      Vec3 normal = (b - a).cross(c - a);
+      if (normal.dot(h.world_position(r, g.vertex[f]) - a) > 0.0) {
+        std::swap(tri[1], tri[2]);
+        normal = -normal;
+      }
+      reference_faces(h, r, tri, n.depth, normal.normalized(), out);
+    }
+  });
+  std::sort(out.begin(), out.end(), face_less);
+  return out;
+}
+
+TEST(BoundarySurface, VListsEqualAPointLocationReference) {
+  // Random drilling with budgeted erosion and budgeted chunk rebuilds; after flushing, every
+  // root's v_list (as a set of outward faces) is the point-location reference.
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int trial = 0; trial < 3; ++trial) {
+    TetHierarchy h(trial == 1 ? make_cube12(10.0) : make_block({10, 8, 6}, 2.0));
+    BoundarySurface surface(h, {.chunk_level = trial});
+    Eroder eroder({.removal_rate_mm3_per_s = 0.0, .max_depth = 3 + trial, .max_node_visits = 500});
+    std::size_t checked = 0;
+    for (int step = 0; step < 10; ++step) {
+      const Vec3 c(10 * u(rng), 8 * u(rng), 6 * u(rng));
+      eroder.enqueue(c, 0.8 + 1.5 * u(rng), 1.0, 0.01);
+      while (eroder.has_pending()) {
+        (void)eroder.run(h, 500);
+        surface.update(h, eroder.changed_nodes(), 700);
+        eroder.clear_changed_roots();
+      }
+      surface.flush(h);
+      if (step % 3 != 2) continue;
+      for (std::size_t r = 0; r < h.root_count(); ++r) {
+        std::vector<FaceKeys> mine;
+        for (const auto& f : surface.v_list(r)) mine.push_back(canonical(f));
+        std::sort(mine.begin(), mine.end(), face_less);
+        const auto ref = reference_v_list(h, r);
+        ASSERT_EQ(mine.size(), ref.size()) << "trial " << trial << " step " << step << " root " << r;
+        for (std::size_t i = 0; i < ref.size(); ++i)
+          ASSERT_TRUE(mine[i] == ref[i]) << "trial " << trial << " step " << step << " root " << r << " face " << i;
+        checked += ref.size();
+      }
+    }
+    EXPECT_GT(checked, 1000U) << "trial " << trial;  // the drilling exposed faces at several depths
+  }
+}
+
+// Reference erosion written from the rules alone, the slow way: node states read from the
+// root (TetHierarchy::state) and geometry from the path (world_vertices) at every node, and
+// only the bounding-sphere rejection. It must leave exactly the tree the Eroder leaves
+// (states carried down the traversal, face-plane rejection, resumable budgeted passes).
+bool reference_would_remove(const std::array<Vec3, 4>& x, int depth, int finest, const Vec3& c, double r) {
+  const Vec3 centroid = 0.25 * (x[0] + x[1] + x[2] + x[3]);
+  double reach = 0.0;
+  bool all_inside = true;
+  for (const auto& v : x) {
+    reach = std::max(reach, (v - centroid).norm());
+    all_inside = all_inside && (v - c).squaredNorm() <= r * r;
+  }
+  if ((c - centroid).norm() > r + reach) return false;
+  if (all_inside) return true;
+  if (depth >= finest) return (centroid - c).squaredNorm() <= r * r;
+  for (const auto& ch : red_children(x))
+    if (reference_would_remove(ch, depth + 1, finest, c, r)) return true;
+  return false;
+}
+
+void reference_erode(TetHierarchy& h, const NodeRef& n, int finest, const Vec3& c, double r) {
+  const NodeState st = h.state(n);
+  if (st == NodeState::Erased) return;
+  const auto x = h.world_vertices(n);
+  const Vec3 centroid = 0.25 * (x[0] + x[1] + x[2] + x[3]);
+  double reach = 0.0;
+  bool all_inside = true;
+  for (const auto& v : x) {
+    reach = std::max(reach, (v - centroid).norm());
+    all_inside = all_inside && (v - c).squaredNorm() <= r * r;
+  }
+  if ((c - centroid).norm() > r + reach) return;
+  if (all_inside || n.depth >= finest) {
+    if (all_inside || (centroid - c).squaredNorm() <= r * r) h.erase(n);
+    return;
+  }
+  if (st == NodeState::Full) {
+    if (!reference_would_remove(x, n.depth, finest, c, r)) return;
+    ASSERT_TRUE(h.refine(n));
+  }
+  for (int s = 0; s < 8; ++s) reference_erode(h, n.child(s), finest, c, r);
+  (void)h.coarsen(n);  // a refinement that removed nothing is undone
+}
+
+std::vector<std::pair<std::uint64_t, NodeState>> leaves(const TetHierarchy& h) {
+  std::vector<std::pair<std::uint64_t, NodeState>> out;
+  for (std::size_t r = 0; r < h.root_count(); ++r)
+    h.for_each_leaf(r, [&](const NodeRef& n, NodeState st) {
+      out.emplace_back((static_cast<std::uint64_t>(n.root) << 40) | (static_cast<std::uint64_t>(n.depth) << 32) | n.path, st);
+    });
+  return out;
+}
+
+TEST(Erosion, TreeEqualsAReferenceEroderWithAndWithoutBudget) {
+  std::mt19937 rng(41);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int trial = 0; trial < 2; ++trial) {
+    const int finest = 4 + trial;
+    TetHierarchy ref(make_block({10, 8, 6}, 2.0));
+    TetHierarchy fast(make_block({10, 8, 6}, 2.0));
+    TetHierarchy budgeted(make_block({10, 8, 6}, 2.0));
+    Eroder eroder({.removal_rate_mm3_per_s = 0.0, .max_depth = finest, .max_node_visits = 0});
+    Eroder slow_passes({.removal_rate_mm3_per_s = 0.0, .max_depth = finest, .max_node_visits = 0, .backlog_spacing = 0.0});
+    std::size_t passes = 0;
+    Vec3 c(10 * u(rng), 8 * u(rng), 3 + 3 * u(rng));
+    for (int step = 0; step < 16; ++step) {
+      // A wandering burr, so later spheres cut through refined and merged regions.
+      c += Vec3(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5) * 1.5;
+      const double r = 0.8 + 1.2 * u(rng);
+      for (std::size_t root = 0; root < ref.root_count(); ++root)
+        reference_erode(ref, NodeRef{static_cast<std::uint32_t>(root), 0, 0}, finest, c, r);
+      (void)eroder.erode(fast, c, r, 1.0, 0.01);
+      slow_passes.enqueue(c, r, 1.0, 0.01);
+      while (slow_passes.has_pending()) {
+        (void)slow_passes.run(budgeted, 150);
+        ++passes;
+      }
+      ASSERT_TRUE(leaves(fast) == leaves(ref)) << "trial " << trial << " step " << step;
+      ASSERT_TRUE(leaves(budgeted) == leaves(ref)) << "trial " << trial << " step " << step;
+    }
+    EXPECT_GT(passes, 100U);  // the budget interrupted the traversal many times
+    EXPECT_LT(ref.material_volume(), ref.total_volume() - 10.0);
   }
 }
 

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <random>
 #include <set>
@@ -276,6 +277,60 @@ TEST(TetHierarchy, LocateFindsTheLeafContainingThePoint) {
   }
   EXPECT_FALSE(h.locate(Vec3(5.0, 1.0, 1.0)).inside_mesh);
   EXPECT_FALSE(h.locate(Vec3(-0.01, 1.0, 1.0)).inside_mesh);
+}
+
+TEST(TetHierarchy, LocateWithBoxRejectionsAgreesWithTestingEveryRoot) {
+  // locate() skips points outside the mesh box and candidate roots whose box does not hold
+  // the point; the slow path tests the barycentric coordinates of every root. Points are
+  // spread over a box 30 % larger than the block (air on every side) and pushed onto root
+  // faces and vertices now and then; only points within 1e-9 of a root boundary, where two
+  // roots tie, are left out of the comparison of roots.
+  TetHierarchy h(make_block({4.0, 3.0, 2.0}, 1.0));
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<double> u(-0.15, 1.15);
+  for (int i = 0; i < 300; ++i) {
+    const auto loc = h.locate(Vec3(4 * std::clamp(u(rng), 0.0, 1.0), 3 * std::clamp(u(rng), 0.0, 1.0), 2 * std::clamp(u(rng), 0.0, 1.0)));
+    if (loc.inside_mesh && loc.leaf.depth < 4) h.refine(loc.leaf);
+  }
+  std::size_t outside = 0, inside = 0, hinted = 0;
+  std::int32_t hint = -1;
+  for (int i = 0; i < 20000; ++i) {
+    Vec3 p(4 * u(rng), 3 * u(rng), 2 * u(rng));
+    if (i % 5 == 0) p = p.cwiseMax(Vec3::Zero()).cwiseMin(Vec3(4.0, 3.0, 2.0));  // on the block's faces
+    if (i % 7 == 0) p = p.array().round();                                         // on mesh vertices
+    std::int32_t best = -1;
+    double best_min = -std::numeric_limits<double>::infinity();
+    for (std::size_t r = 0; r < h.root_count(); ++r) {
+      const auto l = h.root_barycentric(r, p);
+      const double m = *std::min_element(l.begin(), l.end());
+      if (m > best_min) {
+        best_min = m;
+        best = static_cast<std::int32_t>(r);
+      }
+    }
+    for (const std::int32_t hr : {std::int32_t{-1}, hint}) {
+      const Location loc = hr < 0 ? h.locate(p) : h.locate(p, hr);
+      if (best_min < -1e-9) {
+        ASSERT_FALSE(loc.inside_mesh) << "point " << i;
+        ++outside;
+        continue;
+      }
+      if (best_min < -1e-12) continue;  // within rounding of the mesh boundary
+      ASSERT_TRUE(loc.inside_mesh) << "point " << i;
+      if (best_min > 1e-9) {
+        EXPECT_EQ(static_cast<std::int32_t>(loc.leaf.root), best) << "point " << i;
+        ++inside;
+      }
+      const auto l = barycentric(h.world_vertices(loc.leaf), p);
+      EXPECT_GE(*std::min_element(l.begin(), l.end()), -1e-9) << "point " << i;
+      EXPECT_EQ(loc.state, h.state(loc.leaf));
+      if (hr >= 0) ++hinted;
+    }
+    if (best_min > 1e-9) hint = best;
+  }
+  EXPECT_GT(outside, 2000U);
+  EXPECT_GT(inside, 10000U);
+  EXPECT_GT(hinted, 10000U);
 }
 
 TEST(TetHierarchy, RootOrderMaximisesWorstDescendantQuality) {

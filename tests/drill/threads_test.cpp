@@ -104,6 +104,29 @@ TEST(Simulator, ScriptedSessionDrillsAndRenderCopyMatches) {
   EXPECT_LE(st.removed_volume_mm3, swept);
 }
 
+TEST(Simulator, HybridWaitMarginMustBeShorterThanThePeriod) {
+  TetHierarchy h(make_block({12, 12, 12}, 3.0));
+  auto device = plunge(0.4);
+  for (const double spin : {-1e-6, 1e-3, 2e-3}) {
+    SimulatorOptions o;
+    o.haptic_spin_s = spin;
+    EXPECT_THROW((void)Simulator(h, device, o), InvalidInput) << "spin " << spin;
+  }
+  // Plain sleep (0) and a margin just under the period both run a session that drills.
+  for (const double spin : {0.0, 0.9e-3}) {
+    TetHierarchy g(make_block({12, 12, 12}, 3.0));
+    auto d = plunge(0.4);
+    SimulatorOptions o;
+    o.tool.burr_radius_mm = 2.0;
+    o.erosion = {.force_threshold_n = 0.05, .removal_rate_mm3_per_s = 0.0, .max_depth = 3};
+    o.haptic_spin_s = spin;
+    Simulator sim(g, d, o);
+    sim.run(10.0);
+    EXPECT_GT(sim.stats().haptic_ticks, 50U) << "spin " << spin;
+    EXPECT_GT(sim.stats().removed_volume_mm3, 1.0) << "spin " << spin;
+  }
+}
+
 TEST(HapticDevice, CsvTrajectoryParsesAndInterpolates) {
   const auto dir = test::scratch_dir("drill_csv");
   {

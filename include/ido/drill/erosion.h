@@ -110,6 +110,7 @@ class Eroder {
   // One level of the explicit depth-first traversal: a partly covered node being descended.
   struct Frame {
     NodeRef node;
+    std::uint32_t word = 0;  // the node's storage word (internal: its children's block)
     std::array<Vec3, 4> x;
     std::array<std::int8_t, 4> root_face;
     std::int8_t finest = 0;
@@ -119,7 +120,7 @@ class Eroder {
   };
   enum class Enter { Done, Pushed, Abort };
 
-  Enter enter(TetHierarchy& h, const NodeRef& node, const std::array<Vec3, 4>& x, int finest,
+  Enter enter(TetHierarchy& h, const NodeRef& node, std::uint32_t word, const std::array<Vec3, 4>& x, int finest,
               const std::array<std::int8_t, 4>& root_face, ErosionStats& stats);
   void leave(TetHierarchy& h, const Frame& f, ErosionStats& stats);
   void mark(const NodeRef& node, std::uint8_t faces);

@@ -26,6 +26,14 @@ struct SimulatorOptions {
   CouplingOptions coupling;
   ErosionOptions erosion;
   double haptic_period_s = 0.001;      ///< fixed haptic period (s); ≤ 0.001 for ≥ 1 kHz
+  /// Hybrid wait of the haptic thread (s): it sleeps until this long before the next tick,
+  /// then spins (with a pause instruction) until the tick, so a late wake-up from sleep
+  /// eats into this margin instead of the period; costs up to this much CPU per tick.
+  /// 0 (default) = sleep until the tick. Must be < haptic_period_s. Off by default: on the
+  /// shared 2-core reference machine 150 µs doubled the missed deadlines (the spinning
+  /// thread competes with the collision thread and is preempted more; see
+  /// bench/results/drill.md); it is meant for a core of its own.
+  double haptic_spin_s = 0.0;
   double max_substep_mm = 0.0;         ///< erosion sub-steps along the motion; 0 = burr radius / 4
   std::size_t max_haptic_ticks = 1U << 20;  ///< timing samples kept (preallocated)
   double render_period_s = 1.0 / 60.0;  ///< render consumer polling period (s)
@@ -79,8 +87,8 @@ struct SessionStats {
 /// only the collision thread touches the hierarchy.
 class Simulator {
  public:
-  /// @throws ido::InvalidInput for a non-positive haptic period or invalid tool / erosion
-  /// options.
+  /// @throws ido::InvalidInput for a non-positive haptic period, a spin time outside
+  /// [0, period), or invalid tool / erosion options.
   Simulator(TetHierarchy& hierarchy, HapticDevice& device, const SimulatorOptions& options = {});
   ~Simulator();
   Simulator(const Simulator&) = delete;

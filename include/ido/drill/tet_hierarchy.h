@@ -224,6 +224,7 @@ class TetHierarchy {
   static constexpr std::uint32_t kNoBlock = 0xFFFFFFFDU;
 
   [[nodiscard]] Location descend(std::uint32_t root, const std::array<double, 4>& root_lambda) const noexcept;
+  [[nodiscard]] bool outside_root_box(std::size_t r, const Vec3& p_mm) const noexcept;
   std::uint32_t* word_of(const NodeRef& node) noexcept;
   [[nodiscard]] std::uint32_t word_at(const NodeRef& node) const noexcept;
   std::uint32_t allocate_block(std::uint32_t fill);
@@ -238,6 +239,7 @@ class TetHierarchy {
   std::vector<double> m_root_volume;
   std::vector<double> m_root_diameter;
   std::vector<geometry::Box3> m_root_box;
+  geometry::Box3 m_mesh_box;  // union of the root boxes, grown by kBoxSlack × its diagonal
   std::vector<float> m_density;
   double m_total_volume = 0.0;
   double m_mean_edge = 0.0;
