@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // `ido tetmesh` and `ido drill` end to end.
 
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <vector>
@@ -49,6 +50,26 @@ TEST(DrillCli, TetmeshThenDrillWritesConsistentOutputs) {
   ASSERT_TRUE(out.cell_fields.count("density"));
   EXPECT_EQ(out.cell_fields.at("depth").count(), out.tets.size());
   EXPECT_GT(io::read_triangle_mesh(dir / "out.stl").triangles.size(), 12U);
+}
+
+// With neither --max-depth nor --min-size the leaves go down to a quarter of the burr radius:
+// block cells of 2 mm (6 tetrahedra each, longest edge 2·√3 ≈ 3.46 mm) and r = 1.5 mm need
+// level 4 (0.217 mm ≤ 0.375 mm < 0.433 mm at level 3), and the cut reaches it.
+TEST(DrillCli, DefaultFinestLevelFollowsTheBurrRadius) {
+  const auto dir = test::scratch_dir("drill_cli_default_depth");
+  const auto block = (dir / "block.vtu").string();
+  ASSERT_EQ(test::run_tool("tetmesh --shape block:8,8,4,2 -o " + block).exit_code, 0);
+  {
+    std::ofstream f(dir / "path.csv");
+    f << "t,x,y,z\n0,4,4,6\n0.3,4,4,3\n";
+  }
+  const auto r = test::run_tool("drill " + block + " --tool sphere:radius=1.5 --path " + (dir / "path.csv").string() +
+                                " -o " + (dir / "out.vtu").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto out = io::read_tet_mesh(dir / "out.vtu");
+  const auto& depth = out.cell_fields.at("depth").values;
+  ASSERT_FALSE(depth.empty());
+  EXPECT_EQ(*std::max_element(depth.begin(), depth.end()), 4.0);
 }
 
 std::size_t differing_pixels(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b) {
