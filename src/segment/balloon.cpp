@@ -269,18 +269,23 @@ struct Balloon::State {
     if (edge_stage && opt.edge_offset_smoothing > 0) {
       // The wall found along each normal is noisy: average the offsets over the one-ring
       // (a scalar field on the surface, so the surface itself does not shrink).
+      // Weighted by how alike the normals are (a bilateral filter on the normal; Fleishman,
+      // Drori & Cohen-Or, "Bilateral mesh denoising", SIGGRAPH 2003): across a sharp bend (a
+      // twig's tip, a thin process) the neighbour's offset belongs to a differently facing wall.
+      const double bend = opt.edge_offset_bend_deg > 0 ? 1.0 - std::cos(opt.edge_offset_bend_deg * kPi / 180.0) : 0.0;
       for (int pass = 0; pass < opt.edge_offset_smoothing; ++pass) {
         std::vector<double> sum(n, 0.0);
-        std::vector<int> cnt(n, 0);
+        std::vector<double> cnt(n, 0);
         for (const Tri& t : triangles)
           for (int k = 0; k < 3; ++k) {
             const std::int32_t a = t[k], b = t[(k + 1) % 3];
             if (!snapped[b]) continue;
-            sum[a] += normal_mm[b];
-            ++cnt[a];
+            const double wgt = bend > 0 ? std::exp(-(1.0 - d.normals[a].dot(d.normals[b])) / bend) : 1.0;
+            sum[a] += wgt * normal_mm[b];
+            cnt[a] += wgt;
           }
         for (std::size_t i = 0; i < n; ++i)
-          if (snapped[i]) normal_mm[i] = (normal_mm[i] + sum[i]) / double(1 + cnt[i]);
+          if (snapped[i]) normal_mm[i] = (normal_mm[i] + sum[i]) / (1.0 + cnt[i]);
       }
     }
     // Pass 2: displacement = normal request + curvature stiffness + tangential relaxation.

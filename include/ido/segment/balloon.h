@@ -51,6 +51,11 @@ struct BalloonOptions {
   /// is noise-limited; 10 passes spread it over about a Gaussian of σ ≈ 2 edge lengths on the
   /// surface (each pass adds ≈ 3/7 ℓ² of variance per axis). Measured: docs/segmentation.md.
   int edge_offset_smoothing = 10;
+  /// Angle (degrees) between two neighbours' normals at which a neighbour's offset counts 1/e
+  /// in that averaging (weight exp(−(1 − n_a·n_b) / (1 − cos angle))), so the average does not
+  /// reach across a sharp bend such as a 2-mm twig's tip. 0 = plain average. Measured:
+  /// docs/segmentation.md.
+  double edge_offset_bend_deg = 45.0;
   /// Scanner blur (σ, × h) assumed when correcting the inward shift σ² H of the half-way
   /// level of a blurred curved wall (σ² = pre-smoothing² + this²; H the mean curvature).
   double scanner_blur_voxels = 0.7;
