@@ -22,17 +22,29 @@ bool is_background(const Image& im, int x, int y) {
   return p[0] == 255 && p[1] == 255 && p[2] == 255;
 }
 
-Camera front_ortho(double half_height_mm) {
+// Orthographic camera at target + distance · direction looking at @p target.
+Camera ortho(const Vec3& target, const Vec3& direction, const Vec3& up, double half_height_mm,
+             double distance_mm, double near_mm) {
   Camera c;
   c.projection = Projection::Orthographic;
-  c.target = Vec3::Zero();
-  c.direction = Vec3(0, -1, 0);
-  c.up = Vec3(0, 0, 1);
-  c.distance_mm = 100;
-  c.near_mm = 10;
+  c.target = target;
+  c.direction = direction;
+  c.up = up;
+  c.distance_mm = distance_mm;
+  c.near_mm = near_mm;
   c.far_mm = 200;
   c.half_height_mm = half_height_mm;
   return c;
+}
+
+// Looking along +y at the origin (from −y), z up in the picture.
+Camera front_ortho(double half_height_mm) {
+  return ortho(Vec3::Zero(), Vec3(0, -1, 0), Vec3(0, 0, 1), half_height_mm, 100, 10);
+}
+
+// Looking down −z at @p target from above, y up in the picture.
+Camera top_ortho(const Vec3& target, double half_height_mm) {
+  return ortho(target, Vec3(0, 0, 1), Vec3(0, 1, 0), half_height_mm, 50, 1);
 }
 
 TEST(Renderer, SphereSilhouetteCoversPiRSquaredPixels) {
@@ -209,16 +221,7 @@ TEST(Renderer, ClippedTetMeshShowsAMonotoneRampOfALinearField) {
     options.colormap = map;
     ren.add_tet_mesh_clipped(mesh, {.point = Vec3(0, 0, 10), .normal = Vec3(0, 0, 1)}, "x_mm",
                              options);
-    Camera cam;
-    cam.projection = Projection::Orthographic;
-    cam.target = Vec3(20, 10, 10);
-    cam.direction = Vec3(0, 0, 1);
-    cam.up = Vec3(0, 1, 0);
-    cam.distance_mm = 50;
-    cam.near_mm = 1;
-    cam.far_mm = 200;
-    cam.half_height_mm = 10;  // 100 px over 20 mm; 200 px over 40 mm
-    ren.set_camera(cam);
+    ren.set_camera(top_ortho(Vec3(20, 10, 10), 10));  // 100 px over 20 mm; 200 px over 40 mm
     const Image im = ren.render();
     double previous = -1, first = -1, last = -1;
     for (int px = 2; px < 198; ++px) {
@@ -255,16 +258,7 @@ TEST(Renderer, ClippedTetMeshEdgesMarkTheCellBoundaries) {
     options.edge_colour = Vec3(1, 0, 0);
     options.uniform_colour = Vec3(0.5, 0.5, 0.5);
     ren.add_tet_mesh_clipped(mesh, {.point = Vec3(0, 0, 5), .normal = Vec3(0, 0, 1)}, "", options);
-    Camera cam;
-    cam.projection = Projection::Orthographic;
-    cam.target = Vec3(5, 5, 5);
-    cam.direction = Vec3(0, 0, 1);
-    cam.up = Vec3(0, 1, 0);
-    cam.distance_mm = 50;
-    cam.near_mm = 1;
-    cam.far_mm = 200;
-    cam.half_height_mm = 5;  // 10 px per mm: cell boundaries at columns 25, 50, 75
-    ren.set_camera(cam);
+    ren.set_camera(top_ortho(Vec3(5, 5, 5), 5));  // 10 px per mm: cell boundaries at columns 25, 50, 75
     return ren.render();
   };
   auto red = [](const Image& im, int x, int y) {
