@@ -2,6 +2,8 @@
 #include "ido/drill/collision.h"
 
 #include <algorithm>
+#include <array>
+#include <span>
 
 namespace ido::drill {
 
@@ -12,10 +14,21 @@ ContactModel collide(const TetHierarchy& hierarchy, const Tool& tool, const Tool
   const Vec3& c = pose.position_mm;
   Vec3 dir = Vec3::Zero();
   int inside = 0;
-  std::int32_t hint = -1;  // consecutive samples are neighbours: start from the last root
-  for (const Vec3& s : tool.burr_samples()) {
+  std::int32_t hint = -1;  // the last root found (the shaft rings start from it)
+  // On a Fibonacci sphere consecutive samples lie a golden angle apart; the nearest ones are
+  // a Fibonacci number of indices apart (13, 21, 34 for 1000 samples), so the roots found
+  // for those samples are tried first, then the previous sample's, then the hash.
+  constexpr std::size_t kRecent = 64;
+  std::array<std::int32_t, kRecent> recent;
+  recent.fill(-1);
+  const auto samples = tool.burr_samples();
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    const Vec3& s = samples[i];
     const Vec3 p = c + rot * s;
-    const Location loc = hierarchy.locate(p, hint);
+    const std::array<std::int32_t, 4> hints{recent[(i + kRecent - 21) % kRecent], recent[(i + kRecent - 13) % kRecent],
+                                            recent[(i + kRecent - 34) % kRecent], hint};
+    const Location loc = hierarchy.locate(p, std::span<const std::int32_t>(hints));
+    recent[i % kRecent] = loc.inside_mesh ? static_cast<std::int32_t>(loc.leaf.root) : -1;
     if (loc.inside_mesh) hint = static_cast<std::int32_t>(loc.leaf.root);
     if (loc.inside_mesh && loc.state == NodeState::Full) {
       ++inside;

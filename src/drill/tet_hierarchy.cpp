@@ -381,6 +381,20 @@ Location TetHierarchy::locate(const Vec3& p_mm, std::int32_t hint_root) const no
   return locate(p_mm);
 }
 
+Location TetHierarchy::locate(const Vec3& p_mm, std::span<const std::int32_t> hint_roots) const noexcept {
+  for (std::size_t i = 0; i < hint_roots.size(); ++i) {
+    const std::int32_t r = hint_roots[i];
+    if (r < 0 || static_cast<std::size_t>(r) >= m_roots.size()) continue;
+    bool seen = false;  // a root repeated among the hints is tested once
+    for (std::size_t j = 0; j < i && !seen; ++j) seen = hint_roots[j] == r;
+    if (seen) continue;
+    const auto lambda = root_barycentric(static_cast<std::size_t>(r), p_mm);
+    if (std::min(std::min(lambda[0], lambda[1]), std::min(lambda[2], lambda[3])) > 0.0)
+      return descend(static_cast<std::uint32_t>(r), lambda);
+  }
+  return locate(p_mm);
+}
+
 Location TetHierarchy::descend(std::uint32_t root, const std::array<double, 4>& root_lambda) const noexcept {
   const TreeTable& t = TreeTable::get();
   Location loc;

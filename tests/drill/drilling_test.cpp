@@ -97,6 +97,40 @@ TEST(Collision, FlatFaceForceIsNormalAndMonotoneInDepth) {
   EXPECT_GT(last, 0.5);
 }
 
+TEST(Collision, HintedLocationsGiveTheContactOfPlainLocation) {
+  // collide() locates each sample starting from the roots of nearby earlier samples; the
+  // contact must be the one found with a plain hash look-up per sample.
+  TetHierarchy h(make_block({12, 10, 8}, 2.0));
+  Eroder eroder({.removal_rate_mm3_per_s = 0.0, .max_depth = 4, .max_node_visits = 0});
+  for (int k = 0; k < 8; ++k) (void)eroder.erode(h, Vec3(3.0 + k, 5.0, 8.0), 1.5, 1.0, 0.01);
+  const Tool tool({.burr_radius_mm = 1.8, .sample_count = 1000});
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int touching = 0;
+  for (int trial = 0; trial < 60; ++trial) {
+    ToolPose pose;
+    pose.position_mm = Vec3(12 * u(rng), 10 * u(rng), 5.0 + 4.0 * u(rng));
+    pose.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(6.0 * u(rng), Vec3(u(rng), u(rng), 1.0).normalized()));
+    const ContactModel m = collide(h, tool, pose);
+    const Mat3 rot = pose.orientation.normalized().toRotationMatrix();
+    int inside = 0;
+    Vec3 dir = Vec3::Zero();
+    for (const Vec3& s : tool.burr_samples()) {
+      const Location loc = h.locate(pose.position_mm + rot * s);
+      if (loc.inside_mesh && loc.state == NodeState::Full) {
+        ++inside;
+        dir -= rot * s;
+      }
+    }
+    ASSERT_EQ(m.burr_samples_inside, inside) << "trial " << trial;
+    if (inside > 0 && dir.norm() > 1e-6) {
+      EXPECT_TRUE(m.normal.isApprox(dir.normalized(), 1e-12)) << "trial " << trial;
+      ++touching;
+    }
+  }
+  EXPECT_GT(touching, 10);
+}
+
 TEST(Force, SlidingAlongAFlatFaceHasNoSteps) {
   TetHierarchy h(make_block({40, 20, 10}, 2.5));
   const Tool tool({.burr_radius_mm = 2.0});

@@ -163,6 +163,10 @@ class TetHierarchy {
   /// nearby sample; −1: none): when the point lies strictly inside it the hash look-up is
   /// skipped. Same result as locate(p_mm) for points not on a root face.
   [[nodiscard]] Location locate(const Vec3& p_mm, std::int32_t hint_root) const noexcept;
+  /// As locate(p_mm), trying the roots in @p hint_roots first, in order (entries < 0 are
+  /// skipped): the first that holds the point strictly inside is taken without a hash
+  /// look-up. Same result as locate(p_mm) for points not on a root face.
+  [[nodiscard]] Location locate(const Vec3& p_mm, std::span<const std::int32_t> hint_roots) const noexcept;
 
   /// Calls f(NodeRef, NodeState) for every leaf of root @p r (depth-first).
   template <class F>
