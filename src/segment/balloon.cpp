@@ -260,7 +260,14 @@ struct Balloon::State {
           }
           double sp = inflation_speed(I, model);
           if (sp > 0 && edge_k > 0) {
-            const double g = gradient_mm.sample(x[i]) / edge_k;
+            // Bone: only a fall of intensity along the outward normal is an edge to stop at;
+            // a rise (marrow into the cortex of a thin pedicle or lamina) is more bone, and
+            // stopping there left the posterior arch out whenever the noise, hence the
+            // tolerance and k, was low.
+            double slope = gradient_mm.sample(x[i]);
+            if (model.accept_brighter)
+              slope = std::max(0.0, (smoothed.sample(x[i] - nrm * h) - smoothed.sample(x[i] + nrm * h)) / (2.0 * h));
+            const double g = slope / edge_k;
             sp /= 1.0 + g * g;
           }
           normal_mm[i] = step * opt.weights.inflation * sp;

@@ -27,7 +27,8 @@ struct BalloonOptions {
   /// 1 / (1 + (|∇I| / k)²) with k = edge_stop × tolerance / h, the classic edge-stopping
   /// function of geodesic active contours (Caselles, Kimmel & Sapiro, IJCV 1997), so the
   /// steep partial-volume rim of a much brighter or darker neighbour across a thin gap holds
-  /// the surface. 0 disables it.
+  /// the surface. With accept_brighter (bone) only a fall of intensity along the outward
+  /// normal counts (−∂I/∂n instead of |∇I|): a rise into the cortex is more bone. 0 disables it.
   double edge_stop = 0.75;
   double seed_radius_voxels = 1.0;    ///< initial icosphere radius (≈ 2 voxels across)
   double smoothing_sigma_voxels = 0.7;  ///< Gaussian pre-smoothing of the image (× h)
