@@ -81,6 +81,9 @@ TEST(PipelineCli, SpineAortaEndToEnd) {
     EXPECT_TRUE(report["segmentation"][organ].contains("scores")) << organ;
   }
   EXPECT_GE(report["segmentation"]["vessel"]["scores"]["dice"].get<double>(), 0.97);
+  // The vertebra too, posterior arch included: the ring around the canal makes it genus 1.
+  EXPECT_GE(report["segmentation"]["bone"]["scores"]["dice"].get<double>(), 0.97);
+  EXPECT_EQ(report["segmentation"]["bone"]["balloon"]["euler_characteristic"].get<int>(), 0);
 
   // Tetrahedral mesh of the bone: valid and of the segmented volume (to the lattice's size).
   const auto& q = report["tetmesh"]["quality"];
