@@ -4,7 +4,9 @@
 // scripted path with density from the CT, deform the vessel segment, and write every stage's
 // files, pictures, a report.json and a summary.md. Orchestration only: every step is a
 // library call.
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -12,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Eigenvalues>
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
@@ -171,6 +174,31 @@ json tet_quality_json(const geometry::TetMeshReport& q) {
           {"boundary_manifold", q.boundary_manifold}};
 }
 
+/// The plane through the tool path's centroid that best holds the path (least variance of its
+/// positions along the normal); for a straight path, the plane through it most nearly
+/// horizontal. The normal points up (+z), or along +x when the plane is vertical.
+viz::ClipPlane plane_along_path(const drill::ScriptedTrajectory& device) {
+  constexpr int kSamples = 64;
+  std::vector<Vec3> p;
+  for (int k = 0; k <= kSamples; ++k) p.push_back(device.pose_at(device.duration() * k / kSamples).position_mm);
+  Vec3 c = Vec3::Zero();
+  for (const Vec3& q : p) c += q / double(p.size());
+  Mat3 cov = Mat3::Zero();
+  for (const Vec3& q : p) cov += (q - c) * (q - c).transpose();
+  const Eigen::SelfAdjointEigenSolver<Mat3> eig(cov);
+  const Vec3 ev = eig.eigenvalues();
+  Vec3 n = eig.eigenvectors().col(0);
+  if (ev[1] <= 1e-9 * std::max(ev[2], 1e-300)) {
+    // Collinear (or a single point): the plane through the line closest to horizontal.
+    const Vec3 d = ev[2] > 0 ? Vec3(eig.eigenvectors().col(2)) : Vec3(1, 0, 0);
+    n = Vec3::UnitZ() - Vec3::UnitZ().dot(d) * d;
+    if (n.norm() < 1e-9) n = Vec3::UnitX();
+  }
+  n.normalize();
+  if (n.z() < -1e-12 || (std::abs(n.z()) <= 1e-12 && n.x() < 0)) n = -n;
+  return {.point = c, .normal = n};
+}
+
 json run_drill(const Options& o, const geometry::TetMesh& mesh, const image::Volume<float>& ct, const fs::path& dir,
                json& pictures) {
   drill::SimulatorOptions so;
@@ -190,13 +218,17 @@ json run_drill(const Options& o, const geometry::TetMesh& mesh, const image::Vol
   r["path"] = o.drill_path;
   r["surface_checks"] = mesh_check_json(geometry::check_mesh(surface));
 
-  // Picture: the drilled mesh cut through the middle of the tool path, coloured by density.
-  const Vec3 mid = 0.5 * (device.pose_at(0.0).position_mm + device.pose_at(device.duration()).position_mm);
+  // Picture: the drilled mesh cut by the plane that best holds the tool path, seen face on and
+  // coloured by refinement depth, so the whole channel shows as the refined band.
+  const viz::ClipPlane cut = plane_along_path(device);
   viz::Renderer pic(900, 700);
-  pic.add_tet_mesh_clipped(leaves, {.point = mid, .normal = Vec3(1, 0, 0)}, "density");
-  pic.set_camera(pic.fit_camera(90, 10));
+  pic.add_tet_mesh_clipped(leaves, cut, "depth");
+  const double elevation = std::asin(std::clamp(cut.normal.z(), -1.0, 1.0)) * 180.0 / kPi;
+  const double azimuth = std::atan2(cut.normal.x(), -cut.normal.y()) * 180.0 / kPi;
+  pic.set_camera(pic.fit_camera(azimuth, std::clamp(elevation, -89.0, 89.0)));
   pic.write_png(dir / "drilled_clip.png");
-  pictures.push_back({{"file", "drilled_clip.png"}, {"what", "drilled mesh cut through the tool path, coloured by density"}});
+  pictures.push_back({{"file", "drilled_clip.png"},
+                      {"what", "drilled mesh cut along the tool path, coloured by refinement depth (the channel)"}});
   return r;
 }
 
