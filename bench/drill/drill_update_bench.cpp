@@ -7,6 +7,7 @@
 #include <chrono>
 #include <ctime>
 #include <cmath>
+#include <string>
 #include <vector>
 
 #include "ido/drill/boundary_surface.h"
@@ -55,6 +56,15 @@ double process_cpu_s() {
 }
 
 double leaf_edge(int depth) { return kBlockCell * std::sqrt(3.0) / std::ldexp(1.0, depth); }
+
+/// Counters PREFIXp50_ms, PREFIXp99_ms and (with @p with_max) PREFIXmax_ms of times in seconds.
+void add_ms_counters(benchmark::State& state, const std::string& prefix, const std::vector<double>& seconds,
+                     bool with_max = true) {
+  const auto p = percentiles(seconds);
+  state.counters[prefix + "p50_ms"] = p.p50 * 1e3;
+  state.counters[prefix + "p99_ms"] = p.p99 * 1e3;
+  if (with_max) state.counters[prefix + "max_ms"] = p.max * 1e3;
+}
 
 // One collision update as the simulator's collision thread does it: collide the 1000 burr
 // samples, queue the erosion sub-steps, run erosion within the visit budget (0 = unlimited),
@@ -119,26 +129,14 @@ void BM_UpdateTime(benchmark::State& state) {
     faces = static_cast<double>(surface.face_count());
     hash_bytes = static_cast<double>(h.root_hash().memory_bytes());
   }
-  const auto p = percentiles(times);
-  state.counters["p50_ms"] = p.p50 * 1e3;
-  state.counters["p99_ms"] = p.p99 * 1e3;
-  state.counters["max_ms"] = p.max * 1e3;
-  const auto pc = percentiles(cpu_times);
-  state.counters["cpu_p50_ms"] = pc.p50 * 1e3;
-  state.counters["cpu_p99_ms"] = pc.p99 * 1e3;
-  state.counters["cpu_max_ms"] = pc.max * 1e3;
+  add_ms_counters(state, "", times);
+  add_ms_counters(state, "cpu_", cpu_times);
   double total = 0.0;
   for (const double t : cpu_times) total += t;
   state.counters["cpu_total_s"] = total;  // all updates, backlog included
-  const auto pcol = percentiles(collide_cpu);
-  const auto pero = percentiles(erode_cpu);
-  const auto psur = percentiles(surface_cpu);
-  state.counters["collide_cpu_p50_ms"] = pcol.p50 * 1e3;
-  state.counters["collide_cpu_p99_ms"] = pcol.p99 * 1e3;
-  state.counters["erode_cpu_p50_ms"] = pero.p50 * 1e3;
-  state.counters["erode_cpu_p99_ms"] = pero.p99 * 1e3;
-  state.counters["surface_cpu_p50_ms"] = psur.p50 * 1e3;
-  state.counters["surface_cpu_p99_ms"] = psur.p99 * 1e3;
+  add_ms_counters(state, "collide_cpu_", collide_cpu, false);
+  add_ms_counters(state, "erode_cpu_", erode_cpu, false);
+  add_ms_counters(state, "surface_cpu_", surface_cpu, false);
   state.counters["updates"] = static_cast<double>(times.size());
   state.counters["backlog_updates"] = static_cast<double>(backlog_updates);
   state.counters["max_queued"] = static_cast<double>(max_queue);
@@ -194,19 +192,13 @@ void BM_HapticLoop(benchmark::State& state) {
     sim.run(seconds + 30.0);
     st = sim.stats();
   }
-  const auto period = percentiles(st.haptic_period_s);
   const auto force = percentiles(st.force_compute_time_s);
-  const auto update = percentiles(st.update_time_s);
   state.counters["ticks"] = static_cast<double>(st.haptic_ticks);
   state.counters["missed_1ms"] = static_cast<double>(st.missed_deadlines);
-  state.counters["period_p50_ms"] = period.p50 * 1e3;
-  state.counters["period_p99_ms"] = period.p99 * 1e3;
-  state.counters["period_max_ms"] = period.max * 1e3;
+  add_ms_counters(state, "period_", st.haptic_period_s);
   state.counters["force_p99_9_ms"] = force.p999 * 1e3;
   state.counters["force_max_ms"] = force.max * 1e3;
-  state.counters["update_p50_ms"] = update.p50 * 1e3;
-  state.counters["update_p99_ms"] = update.p99 * 1e3;
-  state.counters["update_max_ms"] = update.max * 1e3;
+  add_ms_counters(state, "update_", st.update_time_s);
   state.counters["removed_mm3"] = st.removed_volume_mm3;
   state.counters["backlog_max"] = static_cast<double>(st.erosion_backlog_max);
   state.counters["collision_updates"] = static_cast<double>(st.collision_updates);
@@ -270,14 +262,8 @@ void BM_OpenVdbUpdateTime(benchmark::State& state) {
     }
     mem = static_cast<double>(grid->memUsage());
   }
-  const auto p = percentiles(times);
-  state.counters["p50_ms"] = p.p50 * 1e3;
-  state.counters["p99_ms"] = p.p99 * 1e3;
-  state.counters["max_ms"] = p.max * 1e3;
-  const auto pc = percentiles(cpu_times);
-  state.counters["cpu_p50_ms"] = pc.p50 * 1e3;
-  state.counters["cpu_p99_ms"] = pc.p99 * 1e3;
-  state.counters["cpu_max_ms"] = pc.max * 1e3;
+  add_ms_counters(state, "", times);
+  add_ms_counters(state, "cpu_", cpu_times);
   double total = 0.0;
   for (const double t : cpu_times) total += t;
   state.counters["cpu_total_s"] = total;

@@ -306,14 +306,24 @@ TEST(BoundarySurface, VListsEqualAPointLocationReference) {
 // root (TetHierarchy::state) and geometry from the path (world_vertices) at every node, and
 // only the bounding-sphere rejection. It must leave exactly the tree the Eroder leaves
 // (states carried down the traversal, face-plane rejection, resumable budgeted passes).
-bool reference_would_remove(const std::array<Vec3, 4>& x, int depth, int finest, const Vec3& c, double r) {
-  const Vec3 centroid = 0.25 * (x[0] + x[1] + x[2] + x[3]);
+// A tetrahedron against the burr (centre c, radius r): its centroid, the largest distance of a
+// corner from it, and whether every corner lies inside the burr.
+struct BurrCover {
+  Vec3 centroid;
   double reach = 0.0;
   bool all_inside = true;
+};
+BurrCover burr_cover(const std::array<Vec3, 4>& x, const Vec3& c, double r) {
+  BurrCover b{0.25 * (x[0] + x[1] + x[2] + x[3])};
   for (const auto& v : x) {
-    reach = std::max(reach, (v - centroid).norm());
-    all_inside = all_inside && (v - c).squaredNorm() <= r * r;
+    b.reach = std::max(b.reach, (v - b.centroid).norm());
+    b.all_inside = b.all_inside && (v - c).squaredNorm() <= r * r;
   }
+  return b;
+}
+
+bool reference_would_remove(const std::array<Vec3, 4>& x, int depth, int finest, const Vec3& c, double r) {
+  const auto [centroid, reach, all_inside] = burr_cover(x, c, r);
   if ((c - centroid).norm() > r + reach) return false;
   if (all_inside) return true;
   if (depth >= finest) return (centroid - c).squaredNorm() <= r * r;
@@ -326,13 +336,7 @@ void reference_erode(TetHierarchy& h, const NodeRef& n, int finest, const Vec3& 
   const NodeState st = h.state(n);
   if (st == NodeState::Erased) return;
   const auto x = h.world_vertices(n);
-  const Vec3 centroid = 0.25 * (x[0] + x[1] + x[2] + x[3]);
-  double reach = 0.0;
-  bool all_inside = true;
-  for (const auto& v : x) {
-    reach = std::max(reach, (v - centroid).norm());
-    all_inside = all_inside && (v - c).squaredNorm() <= r * r;
-  }
+  const auto [centroid, reach, all_inside] = burr_cover(x, c, r);
   if ((c - centroid).norm() > r + reach) return;
   if (all_inside || n.depth >= finest) {
     if (all_inside || (centroid - c).squaredNorm() <= r * r) h.erase(n);
