@@ -2,25 +2,25 @@
 #include "ido/io/file_info.h"
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
-#include <string>
 #include <system_error>
 
 #include "ido/core/error.h"
 #include "ido/io/mesh_io.h"
 #include "ido/io/volume_io.h"
+#include "parsers.h"
+#include "text_parser.h"
 
 namespace ido::io {
 
 FileKind file_kind(const std::filesystem::path& path) {
   if (is_triangle_mesh_path(path)) return FileKind::TriangleMesh;
-  std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  if (ext == ".msh") {
+  if (detail::lower_extension(path.filename().string()) == ".msh") {
     // Gmsh files hold either kind: tetrahedra win; a file with triangles only is a surface.
-    if (read_tet_mesh(path).tet_count() > 0) return FileKind::TetMesh;
-    if (!read_triangle_mesh(path).triangles.empty()) return FileKind::TriangleMesh;
+    const std::string bytes = detail::read_file_bytes(path);
+    const std::string name = path.string();
+    if (detail::parse_gmsh_tets(bytes, name).tet_count() > 0) return FileKind::TetMesh;
+    if (!detail::parse_gmsh_triangles(bytes, name).triangles.empty()) return FileKind::TriangleMesh;
     return FileKind::TetMesh;
   }
   if (is_tet_mesh_path(path)) return FileKind::TetMesh;

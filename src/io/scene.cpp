@@ -467,18 +467,18 @@ Scene parse_scene(std::string_view json_text, const std::string& source_name,
     const auto& ji = r.object(root.at("implicit"), "/implicit",
                               {"cg_tolerance", "cg_max_iterations", "preconditioner", "sgs_relaxation",
                                "warm_start", "warm_start_extrapolation"});
-    auto& io = world.implicit_options();
-    io.cg_tolerance = r.positive(ji, "/implicit", "cg_tolerance", 1e-6);
-    io.cg_max_iterations = static_cast<int>(r.integer(ji, "/implicit", "cg_max_iterations", 500, 1));
+    auto& solver = world.implicit_options();
+    solver.cg_tolerance = r.positive(ji, "/implicit", "cg_tolerance", 1e-6);
+    solver.cg_max_iterations = static_cast<int>(r.integer(ji, "/implicit", "cg_max_iterations", 500, 1));
     const std::string pre = r.string(ji, "/implicit", "preconditioner", "ssor");
-    if (pre == "ssor") io.preconditioner = sim::CgPreconditioner::SymmetricGaussSeidel;
-    else if (pre == "jacobi") io.preconditioner = sim::CgPreconditioner::Jacobi;
+    if (pre == "ssor") solver.preconditioner = sim::CgPreconditioner::SymmetricGaussSeidel;
+    else if (pre == "jacobi") solver.preconditioner = sim::CgPreconditioner::Jacobi;
     else r.fail("/implicit/preconditioner", fmt::format("must be 'ssor' or 'jacobi', got '{}'", pre));
-    io.sgs_relaxation = r.positive(ji, "/implicit", "sgs_relaxation", io.sgs_relaxation);
-    if (io.sgs_relaxation >= 2.0)
-      r.fail("/implicit/sgs_relaxation", fmt::format("must be in (0, 2), got {}", io.sgs_relaxation));
-    io.warm_start = r.boolean(ji, "/implicit", "warm_start", io.warm_start);
-    io.warm_start_extrapolation = r.boolean(ji, "/implicit", "warm_start_extrapolation", io.warm_start_extrapolation);
+    solver.sgs_relaxation = r.positive(ji, "/implicit", "sgs_relaxation", solver.sgs_relaxation);
+    if (solver.sgs_relaxation >= 2.0)
+      r.fail("/implicit/sgs_relaxation", fmt::format("must be in (0, 2), got {}", solver.sgs_relaxation));
+    solver.warm_start = r.boolean(ji, "/implicit", "warm_start", solver.warm_start);
+    solver.warm_start_extrapolation = r.boolean(ji, "/implicit", "warm_start_extrapolation", solver.warm_start_extrapolation);
   }
   world.external().gravity_mm_s2 = r.vec3(root, "", "gravity_mm_s2", Vec3::Zero());
   if (root.contains("damping")) {

@@ -17,6 +17,13 @@
 namespace ido::drill {
 namespace {
 
+// `ido drill BLOCK --tool sphere:radius=1.5 --path DIR/path.csv -o DIR/OUT EXTRA`.
+test::CommandResult drill_burr_1_5(const std::string& block, const std::filesystem::path& dir, const std::string& out,
+                                   const std::string& extra = "") {
+  return test::run_tool("drill " + block + " --tool sphere:radius=1.5 --path " + (dir / "path.csv").string() + " -o " +
+                        (dir / out).string() + extra);
+}
+
 TEST(DrillCli, TetmeshThenDrillWritesConsistentOutputs) {
   const auto dir = test::scratch_dir("drill_cli");
   const auto block = (dir / "block.vtu").string();
@@ -28,9 +35,8 @@ TEST(DrillCli, TetmeshThenDrillWritesConsistentOutputs) {
     std::ofstream f(dir / "path.csv");
     f << "t,x,y,z\n0,8,8,11\n0.25,8,8,7\n0.5,11,9,7\n0.6,11,9,11\n";
   }
-  r = test::run_tool("drill " + block + " --tool sphere:radius=1.5 --path " + (dir / "path.csv").string() + " -o " +
-                     (dir / "out.vtu").string() + " --surface " + (dir / "out.stl").string() + " --report " +
-                     (dir / "r.json").string() + " --max-depth 4");
+  r = drill_burr_1_5(block, dir, "out.vtu",
+                     " --surface " + (dir / "out.stl").string() + " --report " + (dir / "r.json").string() + " --max-depth 4");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   std::ifstream in(dir / "r.json");
   const auto rep = nlohmann::json::parse(in);
@@ -63,8 +69,7 @@ TEST(DrillCli, DefaultFinestLevelFollowsTheBurrRadius) {
     std::ofstream f(dir / "path.csv");
     f << "t,x,y,z\n0,4,4,6\n0.3,4,4,3\n";
   }
-  const auto r = test::run_tool("drill " + block + " --tool sphere:radius=1.5 --path " + (dir / "path.csv").string() +
-                                " -o " + (dir / "out.vtu").string());
+  const auto r = drill_burr_1_5(block, dir, "out.vtu");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto out = io::read_tet_mesh(dir / "out.vtu");
   const auto& depth = out.cell_fields.at("depth").values;
@@ -93,9 +98,9 @@ TEST(DrillCli, SnapshotsShowTheSurfaceAsItIsDrilled) {
   std::filesystem::create_directories(shots);
   { std::ofstream(shots / "snapshot_0099.png") << "stale"; }  // an earlier run's picture goes
   { std::ofstream(shots / "notes.txt") << "kept"; }
-  const auto r = test::run_tool("drill " + block + " --tool sphere:radius=1.5 --path " + (dir / "path.csv").string() + " -o " +
-                                (dir / "out.vtu").string() + " --report " + (dir / "r.json").string() +
-                                " --max-depth 3 --snapshots " + shots.string() + " --snapshot-every 0.1 --snapshot-size 160x120");
+  const auto r = drill_burr_1_5(block, dir, "out.vtu",
+                                " --report " + (dir / "r.json").string() + " --max-depth 3 --snapshots " + shots.string() +
+                                    " --snapshot-every 0.1 --snapshot-size 160x120");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   std::ifstream in(dir / "r.json");
   const auto rep = nlohmann::json::parse(in);
@@ -128,12 +133,10 @@ TEST(DrillCli, SnapshotsShowTheSurfaceAsItIsDrilled) {
   const double removed = rep["removed_volume_mm3"];
   EXPECT_GT(removed, 0.5 * 4.0 / 3.0 * kPi * 1.5 * 1.5 * 1.5);
   // Bad snapshot arguments: exit 2 naming the option.
-  auto bad = test::run_tool("drill " + block + " --tool sphere:radius=1.5 --path " + (dir / "path.csv").string() + " -o " +
-                            (dir / "o2.vtu").string() + " --snapshots " + shots.string() + " --snapshot-every 0");
+  auto bad = drill_burr_1_5(block, dir, "o2.vtu", " --snapshots " + shots.string() + " --snapshot-every 0");
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_NE(bad.err.find("--snapshot-every"), std::string::npos);
-  bad = test::run_tool("drill " + block + " --tool sphere:radius=1.5 --path " + (dir / "path.csv").string() + " -o " +
-                       (dir / "o2.vtu").string() + " --snapshots " + (dir / "path.csv").string());
+  bad = drill_burr_1_5(block, dir, "o2.vtu", " --snapshots " + (dir / "path.csv").string());
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_NE(bad.err.find("not a folder"), std::string::npos);
 }
