@@ -89,7 +89,7 @@ image::Volume<std::uint8_t> surface_to_mask(const geometry::TriangleMesh& surfac
 struct Balloon::State {
   BalloonOptions opt;
   image::Volume<float> smoothed;
-  image::Volume<float> gradient_mm;  // |∇ smoothed| (intensity per mm), for the edge stop
+  image::Volume<float> gradient_mm;  // |∇ smoothed| (intensity per mm), the vessels' edge stop
   IntensityModel model;
   double h = 1.0;  // smallest spacing (mm)
   sim::Particles particles;
@@ -264,9 +264,10 @@ struct Balloon::State {
             // a rise (marrow into the cortex of a thin pedicle or lamina) is more bone, and
             // stopping there left the posterior arch out whenever the noise, hence the
             // tolerance and k, was low.
-            double slope = gradient_mm.sample(x[i]);
-            if (model.accept_brighter)
-              slope = std::max(0.0, (smoothed.sample(x[i] - nrm * h) - smoothed.sample(x[i] + nrm * h)) / (2.0 * h));
+            const double slope =
+                model.accept_brighter
+                    ? std::max(0.0, (smoothed.sample(x[i] - nrm * h) - smoothed.sample(x[i] + nrm * h)) / (2.0 * h))
+                    : gradient_mm.sample(x[i]);
             const double g = slope / edge_k;
             sp /= 1.0 + g * g;
           }
@@ -353,7 +354,9 @@ Balloon::Balloon(const image::Volume<float>& ct, const std::vector<Vec3>& seeds_
   m->model.reference = options.reference ? *options.reference : est.reference;
   m->model.tolerance = options.tolerance ? *options.tolerance : est.tolerance;
   m->model.accept_brighter = options.accept_brighter;
-  if (options.edge_stop > 0) m->gradient_mm = image::gradient_magnitude(m->smoothed, options.threaded);
+  // Bone reads its edge stop along the normal from the smoothed image; only vessels need |∇I|.
+  if (options.edge_stop > 0 && !options.accept_brighter)
+    m->gradient_mm = image::gradient_magnitude(m->smoothed, options.threaded);
   if (options.edge_refinement && options.plateau_wall) {
     State& st = *m;
     const double h = st.h, search = options.edge_search_voxels * h;
