@@ -283,36 +283,79 @@ Across virtual_child_across(const NodeRef& p, int s, int f, const std::array<Acr
   return a;
 }
 
-// Emits the parts of face `keys` (outward from our side) bordering erased material, where
-// node m (face g) lies across it at the same level; loc[i] is m's local index of keys[i].
-void emit_against(const TetHierarchy& h, const std::array<PointKey, 3>& keys, const std::array<int, 3>& loc,
-                  const NodeRef& m, std::uint32_t mword, int g, std::vector<SurfaceFace>& out) {
+// Point keys of one root's barycentric keys: the root's vertex order sorted by mesh vertex
+// index is found once, so a key costs a pass over 4 coordinates (the same key as
+// point_key(), which sorts the (vertex, weight) pairs per call).
+struct RootKeys {
+  std::array<std::int32_t, 4> id{};    // mesh vertex indices in increasing order
+  std::array<std::uint8_t, 4> slot{};  // their root vertex slots
+  RootKeys(const TetHierarchy& h, std::size_t r) {
+    const Tet& t = h.root_tet(r);
+    std::array<std::uint8_t, 4> o{0, 1, 2, 3};
+    std::sort(o.begin(), o.end(), [&](std::uint8_t a, std::uint8_t b) { return t[a] < t[b]; });
+    for (std::size_t i = 0; i < 4; ++i) {
+      slot[i] = o[i];
+      id[i] = t[o[i]];
+    }
+  }
+  void make(const BaryKey& key, PointKey& k) const noexcept {
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < 4; ++i) {
+      const std::int32_t w = key[slot[i]];
+      if (w == 0) continue;
+      k.id[n] = id[i];
+      k.weight[n] = w;
+      ++n;
+    }
+    for (; n < 4; ++n) {
+      k.id[n] = -1;
+      k.weight[n] = 0;
+    }
+  }
+};
+
+// Appends the face of root barycentric keys b to out.
+void push_face(const RootKeys& rk, const std::array<BaryKey, 3>& b, std::vector<SurfaceFace>& out) {
+  SurfaceFace& f = out.emplace_back();
+  for (std::size_t i = 0; i < 3; ++i) rk.make(b[i], f[i]);
+}
+
+// Emits the parts of face `b` (root barycentric keys in our root, outward from our side)
+// bordering erased material, where node m (face g) lies across it at the same level; loc[i]
+// is m's local index of b[i]. The sub-face corners are integer midpoints of b (exact: m is
+// internal, so its children's vertices are at depth ≤ kMaxDepth).
+// NOLINTNEXTLINE(misc-no-recursion): depth ≤ kMaxDepth
+void emit_against(const TetHierarchy& h, const ChildFaceTable& cft, const RootKeys& rk, const std::array<BaryKey, 3>& b,
+                  const std::array<int, 3>& loc, const NodeRef& m, std::uint32_t mword, int g,
+                  std::vector<SurfaceFace>& out) {
   const NodeState st = TetHierarchy::state_of_word(mword);
   if (st == NodeState::Full) return;
   if (st == NodeState::Erased) {
-    out.push_back(keys);
+    push_face(rk, b, out);
     return;
   }
-  bool exact = true;
-  const std::array<PointKey, 3> mid{midpoint(keys[0], keys[1], exact), midpoint(keys[1], keys[2], exact),
-                                    midpoint(keys[2], keys[0], exact)};
   // Sub-face vertices: 0..2 = corners, 3 + e = midpoint of edge e (e: 0-1, 1-2, 2-0).
+  std::array<BaryKey, 6> v;
+  std::array<int, 6> code{};
+  for (std::size_t e = 0; e < 3; ++e) {
+    const std::size_t e1 = (e + 1) % 3;
+    v[e] = b[e];
+    for (std::size_t j = 0; j < 4; ++j) v[3 + e][j] = (b[e][j] + b[e1][j]) / 2;
+    code[e] = pair_code(loc[e], loc[e]);
+    code[3 + e] = pair_code(loc[e], loc[e1]);
+  }
   static constexpr int kSub[4][3] = {{0, 3, 5}, {3, 1, 4}, {5, 4, 2}, {3, 4, 5}};
-  auto code_of = [&](int v) {
-    if (v < 3) return pair_code(loc[static_cast<std::size_t>(v)], loc[static_cast<std::size_t>(v)]);
-    const int e = v - 3;
-    return pair_code(loc[static_cast<std::size_t>(e)], loc[static_cast<std::size_t>((e + 1) % 3)]);
-  };
-  auto key_of = [&](int v) -> const PointKey& {
-    return v < 3 ? keys[static_cast<std::size_t>(v)] : mid[static_cast<std::size_t>(v - 3)];
-  };
   for (const auto& sub : kSub) {
-    const std::array<int, 3> codes{code_of(sub[0]), code_of(sub[1]), code_of(sub[2])};
+    const std::array<int, 3> codes{code[static_cast<std::size_t>(sub[0])], code[static_cast<std::size_t>(sub[1])],
+                                   code[static_cast<std::size_t>(sub[2])]};
     int c = -1, cg = -1;
     std::array<int, 3> local{};
-    if (!find_child_face(g, codes, c, cg, local)) continue;
-    emit_against(h, {key_of(sub[0]), key_of(sub[1]), key_of(sub[2])}, local, m.child(c), h.child_word(mword, c), cg,
-                 out);
+    if (!find_child_face(cft, g, codes, c, cg, local)) continue;
+    const std::uint32_t cw = h.child_word(mword, c);
+    if (cw == TetHierarchy::kFull) continue;
+    emit_against(h, cft, rk,
+                 {v[static_cast<std::size_t>(sub[0])], v[static_cast<std::size_t>(sub[1])], v[static_cast<std::size_t>(sub[2])]},
+                 local, m.child(c), cw, cg, out);
   }
 }
 
@@ -357,34 +400,23 @@ NodeGeometry child_geometry(const TreeTable& t, const NodeGeometry& g, std::size
   return c;
 }
 
-// Emits the visible faces of the full leaf of geometry g (face neighbours acr). Point keys
-// are made once per vertex, on first use.
-void emit_leaf(const TetHierarchy& h, std::size_t r, const NodeGeometry& g, const std::array<Across, 4>& acr,
-               std::vector<SurfaceFace>& out) {
-  std::array<PointKey, 4> vkey;
-  std::uint8_t have_key = 0;
+// Emits the visible faces of the full leaf of geometry g (face neighbours acr).
+void emit_leaf(const TetHierarchy& h, const ChildFaceTable& cft, const RootKeys& rk, const NodeGeometry& g,
+               const std::array<Across, 4>& acr, std::vector<SurfaceFace>& out) {
   for (int f = 0; f < 4; ++f) {
     const auto fu = static_cast<std::size_t>(f);
     const Across& a = acr[fu];
-    const NodeState other = TetHierarchy::state_of_word(a.word);
-    if (other == NodeState::Full) continue;
+    if (a.word == TetHierarchy::kFull) continue;
     std::array<int, 3> order{kFaceVerts[f][0], kFaceVerts[f][1], kFaceVerts[f][2]};
     if (g.flipped) std::swap(order[1], order[2]);
-    std::array<PointKey, 3> keys;
-    std::array<int, 3> loc{};
-    for (std::size_t i = 0; i < 3; ++i) {
-      const auto v = static_cast<std::size_t>(order[i]);
-      if (((have_key >> v) & 1U) == 0) {
-        vkey[v] = point_key(h, r, g.vertex[v]);
-        have_key = static_cast<std::uint8_t>(have_key | (1U << v));
-      }
-      keys[i] = vkey[v];
-      loc[i] = a.vmap[v];
-    }
-    if (other == NodeState::Erased) {
-      out.push_back(keys);
+    const std::array<BaryKey, 3> b{g.vertex[static_cast<std::size_t>(order[0])], g.vertex[static_cast<std::size_t>(order[1])],
+                                   g.vertex[static_cast<std::size_t>(order[2])]};
+    if (a.word == TetHierarchy::kErased) {
+      push_face(rk, b, out);
     } else {
-      emit_against(h, keys, loc, a.node, a.word, a.face, out);
+      const std::array<int, 3> loc{a.vmap[static_cast<std::size_t>(order[0])], a.vmap[static_cast<std::size_t>(order[1])],
+                                   a.vmap[static_cast<std::size_t>(order[2])]};
+      emit_against(h, cft, rk, b, loc, a.node, a.word, a.face, out);
     }
   }
 }
@@ -394,13 +426,13 @@ void emit_leaf(const TetHierarchy& h, std::size_t r, const NodeGeometry& g, cons
 // states and its geometry come from its parent's in O(1). Erased children and full
 // children with four full neighbours cost one visit each and no further work.
 // NOLINTNEXTLINE(misc-no-recursion): depth ≤ kMaxDepth
-void visit(const TetHierarchy& h, const WalkTables& wt, std::size_t r, const NodeRef& n, std::uint32_t word,
+void visit(const TetHierarchy& h, const WalkTables& wt, const RootKeys& rk, const NodeRef& n, std::uint32_t word,
            const NodeGeometry& g, const std::array<Across, 4>& acr, std::vector<SurfaceFace>& out, std::size_t& visits) {
   ++visits;
   const NodeState st = TetHierarchy::state_of_word(word);
   if (st == NodeState::Erased) return;
   if (st == NodeState::Full) {
-    emit_leaf(h, r, g, acr, out);
+    emit_leaf(h, wt.child_face, rk, g, acr, out);
     return;
   }
   for (int c = 0; c < 8; ++c) {
@@ -416,10 +448,10 @@ void visit(const TetHierarchy& h, const WalkTables& wt, std::size_t r, const Nod
       ++visits;
       bool exposed = false;
       for (const Across& a : cacr) exposed = exposed || a.word != TetHierarchy::kFull;
-      if (exposed) emit_leaf(h, r, child_geometry(wt.tree, g, cu), cacr, out);
+      if (exposed) emit_leaf(h, wt.child_face, rk, child_geometry(wt.tree, g, cu), cacr, out);
       continue;
     }
-    visit(h, wt, r, n.child(c), cw, child_geometry(wt.tree, g, cu), cacr, out, visits);
+    visit(h, wt, rk, n.child(c), cw, child_geometry(wt.tree, g, cu), cacr, out, visits);
   }
 }
 
@@ -496,34 +528,54 @@ void BoundarySurface::rebuild_all(const TetHierarchy& hierarchy) {
 
 void BoundarySurface::mark_root(std::uint32_t r) { m_dirty.push_back({r, 0, m_full_chunks}); }
 
+namespace {
+
+// For child slot s and a mask of its faces, the mask of the parent faces that those of them
+// lying on the parent's boundary are on (faces shared with a sibling drop out); a child's
+// faces lie on distinct parent faces, so the map works on masks. Tabulated once.
+const std::array<std::array<std::uint8_t, 16>, 8>& parent_face_masks() {
+  static const auto kMasks = [] {
+    std::array<std::array<std::uint8_t, 16>, 8> m{};
+    const TreeTable& t = TreeTable::get();
+    for (std::size_t s = 0; s < 8; ++s)
+      for (std::size_t mask = 0; mask < 16; ++mask) {
+        unsigned up = 0;
+        for (std::size_t f = 0; f < 4; ++f) {
+          if (((mask >> f) & 1U) == 0 || t.face_link[s][f].sibling >= 0) continue;
+          up |= 1U << t.face_link[s][f].parent_face;
+        }
+        m[s][mask] = static_cast<std::uint8_t>(up);
+      }
+    return m;
+  }();
+  return kMasks;
+}
+
+}  // namespace
+
 // Marks the chunks of `node` and, for each of its faces on the boundary of its ancestor y at
-// the chunk level (or of the node itself when shallower), records (y, face) in m_faces_out
-// for mark_faces().
+// the chunk level (or of the node itself when shallower), records (y, face) in m_face_marks
+// for mark_faces(). A range or mark equal to the previous one is not repeated (changed nodes
+// come in traversal order, so neighbours in the list share their chunk).
 void BoundarySurface::mark_node(const TetHierarchy& /*h*/, const NodeRef& node) {
   const int level = m_options.chunk_level;
   const auto [lo, hi] = chunk_range(node, level);
-  m_dirty.push_back({node.root, lo, hi});
-  const TreeTable& t = TreeTable::get();
+  if (m_dirty.empty() || m_dirty.back().root != node.root || m_dirty.back().lo != lo || m_dirty.back().hi != hi)
+    m_dirty.push_back({node.root, lo, hi});
+  const auto& up = parent_face_masks();
+  unsigned mask = 0xF;
   NodeRef y = node;
-  std::uint8_t mask = 0;
-  for (int f = 0; f < 4; ++f) {
-    NodeRef a = node;
-    int g = f;
-    bool interior = false;
-    while (a.depth > level) {
-      const auto link = t.face_link[static_cast<std::size_t>(a.slot(a.depth))][static_cast<std::size_t>(g)];
-      if (link.sibling >= 0) {
-        interior = true;
-        break;
-      }
-      g = link.parent_face;
-      a = a.parent();
-    }
-    if (interior) continue;
-    y = a;
-    mask = static_cast<std::uint8_t>(mask | (1U << g));
+  if (node.depth > level) {
+    for (int d = node.depth; d > level && mask != 0; --d) mask = up[static_cast<std::size_t>(node.slot(d))][mask];
+    y.depth = static_cast<std::uint8_t>(level);
+    y.path = node.path & ((1U << (3 * level)) - 1U);
   }
-  if (mask != 0) m_face_marks.push_back({y, mask});
+  if (mask == 0) return;
+  if (!m_face_marks.empty() && m_face_marks.back().node == y) {
+    m_face_marks.back().faces = static_cast<std::uint8_t>(m_face_marks.back().faces | mask);
+  } else {
+    m_face_marks.push_back({y, static_cast<std::uint8_t>(mask)});
+  }
 }
 
 // Marks the chunks across the recorded faces: one top-down walk per distinct node.
@@ -658,6 +710,7 @@ std::uint32_t BoundarySurface::rebuild_range(const TetHierarchy& h, std::uint32_
   hi = std::min<std::uint32_t>(hi, static_cast<std::uint32_t>(ch.size()));
   const std::array<Across, 4> racr = root_acr(h, r);
   const WalkTables wt;
+  const RootKeys rk(h, r);
   std::uint32_t c = lo;
   while (c < hi) {
     NodeRef node{r, 0, 0};
@@ -677,7 +730,7 @@ std::uint32_t BoundarySurface::rebuild_range(const TetHierarchy& h, std::uint32_
     const std::uint32_t ulo = c & ~(span - 1U);
     auto& out = ch[ulo];
     out.clear();
-    visit(h, wt, r, node, word, h.geometry(node), acr, out, m_visits);
+    visit(h, wt, rk, node, word, h.geometry(node), acr, out, m_visits);
     m_rebuilt_chunks.push_back({r, ulo});
     for (std::uint32_t k = ulo + 1; k < ulo + span; ++k) {
       if (ch[k].empty()) continue;
