@@ -1,12 +1,12 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "ido/geometry/self_intersection.h"
 
-
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <bit>
 #include <cmath>
-#include <functional>
+#include <limits>
 #include <mutex>
 
 #include "ido/core/parallel.h"
@@ -78,65 +78,360 @@ namespace {
 
 using Pairs = std::vector<std::pair<std::int32_t, std::int32_t>>;
 
-/// Broad phase on a uniform grid (cell size 2.5× the mean triangle box extent), the usual
-/// case for surface meshes with triangles of similar size: each triangle is registered in
-/// the cells its box overlaps (bucketed by a counting sort), every pair of triangles
-/// sharing a cell has its boxes compared, and a pair is reported only by the cell holding
-/// the lower corner of the two boxes' intersection (so exactly once). Returns false, doing
-/// nothing, when the grid would be unreasonable (very uneven triangle sizes or a huge
-/// grid): the caller then uses the BVH.
-template <class Accept>
-bool grid_pairs(const std::vector<Aabb>& boxes, const Accept& accept, bool threaded,
-                bool first_only, Pairs& out) {
-  const std::size_t n = boxes.size();
+constexpr double kUnitRoundoff = 0x1p-53;
+/// Forward error bound of plane_side's determinant relative to its permanent: the same
+/// evaluation (three coordinate differences from one base point, three 2 × 2 minors, one dot
+/// product) and the same bound as orient3d's filter (above Shewchuk's (7 + 56ε)ε).
+constexpr double kPlaneSideBound = 8.0 * kUnitRoundoff;
+
+/// The supporting plane of a triangle (a, b, c) prepared for many sign tests: the normal
+/// n = (b − a) × (c − a) as evaluated in floating point, the absolute sums of the products
+/// in each of its components (for the error bound), and the base point a.
+struct Plane {
+  double nx, ny, nz;
+  double px, py, pz;
+  double ax, ay, az;
+};
+
+Plane plane_of(const Vec3& a, const Vec3& b, const Vec3& c) {
+  const double bax = b.x() - a.x(), bay = b.y() - a.y(), baz = b.z() - a.z();
+  const double cax = c.x() - a.x(), cay = c.y() - a.y(), caz = c.z() - a.z();
+  const double m1 = bay * caz, m2 = baz * cay;
+  const double m3 = baz * cax, m4 = bax * caz;
+  const double m5 = bax * cay, m6 = bay * cax;
+  return {m1 - m2, m3 - m4, m5 - m6,
+          std::abs(m1) + std::abs(m2), std::abs(m3) + std::abs(m4), std::abs(m5) + std::abs(m6),
+          a.x(), a.y(), a.z()};
+}
+
+/// Sign of orient3d(a, b, c, d) when the floating-point filter certifies it (+1 / −1), 0 when
+/// it cannot (the point may lie on the plane: ask the exact predicate). The determinant is
+/// det[d − a; b − a; c − a] = det[b − a; c − a; d − a], evaluated like orient3d's filter.
+inline int plane_side(const Plane& p, const Vec3& d) {
+  const double dx = d.x() - p.ax, dy = d.y() - p.ay, dz = d.z() - p.az;
+  const double det = p.nx * dx + p.ny * dy + p.nz * dz;
+  const double bound =
+      kPlaneSideBound * (p.px * std::abs(dx) + p.py * std::abs(dy) + p.pz * std::abs(dz));
+  return (det > bound) - (det < -bound);
+}
+
+/// Both points certified strictly on one side of the plane.
+inline bool same_strict_side(const Plane& p, const Vec3& d, const Vec3& e) {
+  const int s = plane_side(p, d);
+  return s != 0 && s == plane_side(p, e);
+}
+
+/// Sign of orient3d(a, b, c, d) when its floating-point filter certifies it, else 0.
+inline int orient3d_certified(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  return plane_side(plane_of(a, b, c), d);
+}
+
+/// Whether the segment [p, q], whose end points are certified strictly on opposite sides of
+/// the plane of the triangle (t0, t1, t2), passes through the closed triangle: the line is on
+/// one side of (or on) all three edge lines (as in the exact segment–triangle test).
+/// 1 yes, 0 no, −1 undecided by the filter.
+inline int crossing_segment_hits(const Vec3& p, const Vec3& q, const Vec3& t0, const Vec3& t1,
+                                 const Vec3& t2) {
+  const int s1 = orient3d_certified(p, q, t0, t1);
+  const int s2 = orient3d_certified(p, q, t1, t2);
+  const int s3 = orient3d_certified(p, q, t2, t0);
+  if (s1 == 0 || s2 == 0 || s3 == 0) return -1;
+  return s1 == s2 && s2 == s3 ? 1 : 0;
+}
+
+/// pair_intersects with a floating-point filter in front. When certified signs decide the
+/// exact test's own steps, it answers from them: a separating plane through one triangle; an
+/// edge neighbour's third corner off the other's plane; for a vertex neighbour, both planes
+/// crossed and each opposite edge tested against the other triangle. Anything the filter
+/// cannot certify (near-coplanar, degenerate, repeated indices) goes to the exact test, so
+/// the answers are those of pair_intersects. @p pa is the plane of @p ta.
+bool filtered_pair_intersects(const std::vector<Vec3>& vertices, const Tri& ta, const Plane& pa,
+                              const Tri& tb) {
+  auto at = [&](std::int32_t i) -> const Vec3& { return vertices[static_cast<std::size_t>(i)]; };
+  const bool distinct = ta[0] != ta[1] && ta[1] != ta[2] && ta[0] != ta[2] && tb[0] != tb[1] &&
+                        tb[1] != tb[2] && tb[0] != tb[2];
+  if (distinct) {
+    // Which corners are shared by index, as bit masks.
+    unsigned shared_b = 0;
+    unsigned shared_a = 0;
+    for (unsigned j = 0; j < 3; ++j) {
+      for (unsigned i = 0; i < 3; ++i) {
+        if (tb[j] == ta[i]) {
+          shared_b |= 1u << j;
+          shared_a |= 1u << i;
+        }
+      }
+    }
+    const unsigned shared = (0x3221'2110u >> (4 * shared_b)) & 0xfu;  // bits set in shared_b
+    if (shared == 2) {
+      const auto free_b = static_cast<unsigned>(std::countr_zero(~shared_b & 7u));
+      if (plane_side(pa, at(tb[free_b])) != 0) return false;
+    } else if (shared == 1) {
+      const auto vb = static_cast<unsigned>(std::countr_zero(shared_b));
+      const auto va = static_cast<unsigned>(std::countr_zero(shared_a));
+      const Vec3& b1 = at(tb[(vb + 1) % 3]);
+      const Vec3& b2 = at(tb[(vb + 2) % 3]);
+      const int sb1 = plane_side(pa, b1);
+      const int sb2 = plane_side(pa, b2);
+      if (sb1 != 0 && sb1 == sb2) return false;
+      const Vec3& a1 = at(ta[(va + 1) % 3]);
+      const Vec3& a2 = at(ta[(va + 2) % 3]);
+      const Vec3& b0 = at(tb[0]);
+      const Vec3& b1o = at(tb[1]);
+      const Vec3& b2o = at(tb[2]);
+      const Plane pb = plane_of(b0, b1o, b2o);
+      const int sa1 = plane_side(pb, a1);
+      const int sa2 = plane_side(pb, a2);
+      if (sa1 != 0 && sa1 == sa2) return false;
+      if (sb1 != 0 && sb2 != 0 && sa1 != 0 && sa2 != 0) {
+        // Both opposite edges cross the other's plane strictly; the triangles meet beyond
+        // the shared vertex iff one of these edges passes through the other triangle.
+        const int ha = crossing_segment_hits(a1, a2, b0, b1o, b2o);
+        if (ha == 1) return true;
+        if (ha == 0) {
+          const int hb = crossing_segment_hits(b1, b2, at(ta[0]), at(ta[1]), at(ta[2]));
+          if (hb >= 0) return hb == 1;
+        }
+      }
+    } else if (shared == 0) {
+      const Vec3& b0 = at(tb[0]);
+      const Vec3& b1 = at(tb[1]);
+      const Vec3& b2 = at(tb[2]);
+      const int s0 = plane_side(pa, b0);
+      if (s0 != 0 && s0 == plane_side(pa, b1) && s0 == plane_side(pa, b2)) return false;
+      const Plane pb = plane_of(b0, b1, b2);
+      const int r0 = plane_side(pb, at(ta[0]));
+      if (r0 != 0 && r0 == plane_side(pb, at(ta[1])) && r0 == plane_side(pb, at(ta[2]))) return false;
+    }
+  }
+  return pair_intersects(vertices, ta, tb);
+}
+
+/// A triangle's bounding box rounded outward to floats, and the grid cell of its lower corner.
+struct CellBox {
+  std::array<float, 3> lo;
+  std::array<float, 3> hi;
+  std::array<std::uint16_t, 3> cell_lo;
+};
+
+/// The next float below @p f (finite, not the lowest float), by its bit pattern.
+inline float float_below(float f) {
+  if (f == 0.0f) return -std::numeric_limits<float>::denorm_min();
+  const auto bits = std::bit_cast<std::uint32_t>(f);
+  return std::bit_cast<float>(f > 0.0f ? bits - 1u : bits + 1u);
+}
+/// The largest float ≤ x and the smallest float ≥ x (|x| well inside the float range).
+inline float round_down(double x) {
+  const auto f = static_cast<float>(x);
+  return static_cast<double>(f) > x ? float_below(f) : f;
+}
+inline float round_up(double x) {
+  const auto f = static_cast<float>(x);
+  return static_cast<double>(f) < x ? -float_below(-f) : f;
+}
+
+/// A uniform grid over the mesh's bounding box (cells of side h, at most 65 535 per axis).
+struct Grid {
+  std::array<double, 3> origin{};
+  double inv_h = 0.0;
+  std::array<std::uint32_t, 3> dims{};
+  std::size_t cells = 0;
+
+  [[nodiscard]] std::uint16_t cell(float x, int k) const {
+    // Clamped first, so truncation is floor (and the map stays monotone in x).
+    const double c = (static_cast<double>(x) - origin[static_cast<std::size_t>(k)]) * inv_h;
+    return static_cast<std::uint16_t>(
+        std::clamp(c, 0.0, static_cast<double>(dims[static_cast<std::size_t>(k)] - 1)));
+  }
+  [[nodiscard]] std::size_t key(std::uint32_t x, std::uint32_t y, std::uint32_t z) const {
+    return (static_cast<std::size_t>(z) * dims[1] + y) * dims[0] + x;
+  }
+};
+
+/// Chooses the grid: cell side 2× the mean (sampled) largest box extent of the triangles,
+/// enlarged if the grid would exceed about 4 cells per triangle. Returns false when no
+/// sensible grid exists (zero-size mesh box, coordinates beyond float range): the caller then
+/// uses the BVH.
+bool plan_grid(const TriangleMesh& mesh, Grid& grid) {
+  const std::size_t n = mesh.triangles.size();
   Aabb all;
+  for (const Vec3& v : mesh.vertices) all.extend(v);
+  if (all.min.cwiseAbs().maxCoeff() > 1e30 || all.max.cwiseAbs().maxCoeff() > 1e30) return false;
+  const std::size_t samples = std::min<std::size_t>(n, 2048);
   double mean_extent = 0.0;
-  for (const Aabb& b : boxes) {
-    all.extend(b);
+  for (std::size_t s = 0; s < samples; ++s) {
+    const Tri& t = mesh.triangles[s * n / samples];
+    const Aabb b = Aabb::of_triangle(mesh.vertices[static_cast<std::size_t>(t[0])],
+                                     mesh.vertices[static_cast<std::size_t>(t[1])],
+                                     mesh.vertices[static_cast<std::size_t>(t[2])]);
     mean_extent += b.extent().maxCoeff();
   }
-  mean_extent /= static_cast<double>(n);
-  const double h = 2.5 * mean_extent;
-  if (!(h > 0.0)) return false;
-  const Vec3 dims_real = (all.extent() / h).array().floor() + 1.0;
-  if (dims_real.prod() > static_cast<double>(8 * n + 4096)) return false;
-  const std::array<std::uint32_t, 3> dims{static_cast<std::uint32_t>(dims_real.x()),
-                                          static_cast<std::uint32_t>(dims_real.y()),
-                                          static_cast<std::uint32_t>(dims_real.z())};
-  const double inv_h = 1.0 / h;
-  auto cell = [&](double x, int k) {
-    const double c = std::floor((x - all.min[k]) * inv_h);
-    return static_cast<std::uint32_t>(std::clamp(c, 0.0, static_cast<double>(dims[static_cast<std::size_t>(k)] - 1)));
-  };
-  auto key = [&](std::uint32_t x, std::uint32_t y, std::uint32_t z) {
-    return (static_cast<std::size_t>(z) * dims[1] + y) * dims[0] + x;
-  };
-  // Per triangle: its cell range.
-  std::vector<std::array<std::uint32_t, 6>> range(n);
-  std::size_t entries = 0;
-  for (std::size_t t = 0; t < n; ++t) {
-    std::size_t cells = 1;
-    for (int k = 0; k < 3; ++k) {
-      range[t][static_cast<std::size_t>(k)] = cell(boxes[t].min[k], k);
-      range[t][static_cast<std::size_t>(k) + 3] = cell(boxes[t].max[k], k);
-      cells *= range[t][static_cast<std::size_t>(k) + 3] - range[t][static_cast<std::size_t>(k)] + 1;
+  mean_extent /= static_cast<double>(samples);
+  // (Float boxes may reach a float step beyond the mesh box: cell() clamps, which keeps it
+  // monotone, all the owner rule needs.)
+  const Vec3 lo = all.min;
+  const Vec3 ext = all.max - lo;
+  double h = 2.0 * mean_extent;
+  const double max_cells = 4.0 * static_cast<double>(n) + 4096.0;
+  const double volume = std::max(ext.x(), 1e-300) * std::max(ext.y(), 1e-300) * std::max(ext.z(), 1e-300);
+  if (!(h > 0.0) || !std::isfinite(h)) h = std::cbrt(volume / max_cells);
+  for (int guard = 0; guard < 64; ++guard) {
+    const Vec3 d = (ext / h).array().floor() + 1.0;
+    if (d.prod() <= max_cells && d.maxCoeff() <= 65535.0) {
+      grid.origin = {lo.x(), lo.y(), lo.z()};
+      grid.inv_h = 1.0 / h;
+      grid.dims = {static_cast<std::uint32_t>(d.x()), static_cast<std::uint32_t>(d.y()),
+                   static_cast<std::uint32_t>(d.z())};
+      grid.cells = static_cast<std::size_t>(d.prod());
+      return std::isfinite(grid.inv_h) && grid.inv_h > 0.0;
     }
-    entries += cells;
-    if (entries > 32 * n + 1024) return false;
+    h *= 1.25;
   }
-  // Counting sort of (cell, triangle) entries by cell; triangles stay ascending in a cell.
-  const std::size_t ncells = static_cast<std::size_t>(dims_real.prod());
-  std::vector<std::uint32_t> start(ncells + 1, 0);
+  return false;
+}
+
+CellBox cell_box(const Grid& grid, const Vec3& a, const Vec3& b, const Vec3& c) {
+  CellBox r{};
+  for (int k = 0; k < 3; ++k) {
+    const auto ks = static_cast<std::size_t>(k);
+    r.lo[ks] = round_down(std::min({a[k], b[k], c[k]}));
+    r.hi[ks] = round_up(std::max({a[k], b[k], c[k]}));
+    r.cell_lo[ks] = grid.cell(r.lo[ks], k);
+  }
+  return r;
+}
+
+inline bool boxes_overlap(const CellBox& p, const CellBox& q) {
+  return p.lo[0] <= q.hi[0] && q.lo[0] <= p.hi[0] && p.lo[1] <= q.hi[1] && q.lo[1] <= p.hi[1] &&
+         p.lo[2] <= q.hi[2] && q.lo[2] <= p.hi[2];
+}
+
+/// Work limits after which the grid gives up for the BVH (very uneven triangle sizes).
+std::size_t entry_budget(std::size_t n) { return 32 * n + 4096; }
+std::size_t visit_budget(std::size_t n) { return 256 * n + (std::size_t{1} << 22); }
+
+/// The cells of a box: [lo, hi] per axis.
+struct CellRange {
+  std::array<std::uint32_t, 3> lo;
+  std::array<std::uint32_t, 3> hi;
+};
+
+CellRange cell_range(const Grid& grid, const CellBox& b) {
+  return {{b.cell_lo[0], b.cell_lo[1], b.cell_lo[2]},
+          {grid.cell(b.hi[0], 0), grid.cell(b.hi[1], 1), grid.cell(b.hi[2], 2)}};
+}
+
+/// The owner rule that makes each overlapping pair count once: a pair shares every cell that
+/// both boxes cover, and is taken only in the cell of the lower corner of the boxes'
+/// intersection, max(lower cell of t, lower cell of u) per axis. In a cell (x, y, z) of t, a
+/// triangle u of that cell passes when its lower cell equals the cell's coordinate on every
+/// axis where the cell lies beyond t's lower cell (elsewhere it cannot exceed it).
+struct OwnerTest {
+  std::uint32_t x, y, z;
+  bool need_x, need_y, need_z;
+  [[nodiscard]] bool passes(const CellBox& bu) const {
+    return !((need_x && bu.cell_lo[0] != x) || (need_y && bu.cell_lo[1] != y) ||
+             (need_z && bu.cell_lo[2] != z));
+  }
+};
+
+/// Single-threaded search in one pass: each triangle is tested against the triangles
+/// inserted before it into the cells of its box, then inserted (cells hold linked lists).
+/// With @p first_only it stops at the first intersecting pair, having touched only the
+/// triangles before it. Returns false (out untouched) when the grid gives up.
+bool grid_pairs_incremental(const TriangleMesh& mesh, const Grid& grid, bool first_only, Pairs& out) {
+  const std::size_t n = mesh.triangles.size();
+  const auto& vertices = mesh.vertices;
+  std::vector<std::uint32_t> head(grid.cells, 0);  // entry index + 1; 0: empty cell
+  struct Entry {
+    std::uint32_t next;  // entry index + 1 of the next (earlier) entry of the cell; 0: none
+    std::int32_t triangle;
+  };
+  std::vector<Entry> entries;
+  entries.reserve(4 * n);
+  std::vector<CellBox> boxes(n);
+  std::vector<std::int32_t> candidates;
+  const std::size_t max_entries = entry_budget(n);
+  const std::size_t max_visits = visit_budget(n);
+  std::size_t visits = 0;
+  Pairs found;
+  for (std::size_t ts = 0; ts < n; ++ts) {
+    const auto t = static_cast<std::int32_t>(ts);
+    const Tri& tri = mesh.triangles[ts];
+    const Vec3& a = vertices[static_cast<std::size_t>(tri[0])];
+    const Vec3& b = vertices[static_cast<std::size_t>(tri[1])];
+    const Vec3& c = vertices[static_cast<std::size_t>(tri[2])];
+    const CellBox bt = cell_box(grid, a, b, c);
+    boxes[ts] = bt;
+    const CellRange r = cell_range(grid, bt);
+    candidates.clear();
+    for (std::uint32_t z = r.lo[2]; z <= r.hi[2]; ++z) {
+      for (std::uint32_t y = r.lo[1]; y <= r.hi[1]; ++y) {
+        for (std::uint32_t x = r.lo[0]; x <= r.hi[0]; ++x) {
+          const OwnerTest owner{x, y, z, x != r.lo[0], y != r.lo[1], z != r.lo[2]};
+          std::uint32_t& cell_head = head[grid.key(x, y, z)];
+          for (std::uint32_t e = cell_head; e != 0;) {
+            const Entry entry = entries[e - 1];
+            e = entry.next;
+            ++visits;
+            const CellBox& bu = boxes[static_cast<std::size_t>(entry.triangle)];
+            if (owner.passes(bu) && boxes_overlap(bt, bu)) candidates.push_back(entry.triangle);
+          }
+          entries.push_back({cell_head, t});
+          cell_head = static_cast<std::uint32_t>(entries.size());
+        }
+      }
+    }
+    if (entries.size() > max_entries || visits > max_visits) return false;
+    if (candidates.empty()) continue;
+    const Plane pt = plane_of(a, b, c);
+    for (const std::int32_t u : candidates) {
+      if (filtered_pair_intersects(vertices, tri, pt, mesh.triangles[static_cast<std::size_t>(u)])) {
+        found.emplace_back(u, t);
+        if (first_only) {
+          out = std::move(found);
+          return true;
+        }
+      }
+    }
+  }
+  std::sort(found.begin(), found.end());
+  out = std::move(found);
+  return true;
+}
+
+/// Multi-threaded search: boxes in parallel, cells filled by a counting sort (triangles
+/// ascending in each cell), then each triangle against the lower-numbered triangles of its
+/// cells, in parallel. With @p first_only every chunk checks a shared stop flag.
+bool grid_pairs_threaded(const TriangleMesh& mesh, const Grid& grid, bool first_only, Pairs& out) {
+  const std::size_t n = mesh.triangles.size();
+  const auto& vertices = mesh.vertices;
+  std::vector<CellBox> boxes(n);
+  std::vector<std::uint32_t> cell_count(n);
+  parallel_for_ranges(n, [&](std::size_t b, std::size_t e) {
+    for (std::size_t t = b; t < e; ++t) {
+      const Tri& tri = mesh.triangles[t];
+      boxes[t] = cell_box(grid, vertices[static_cast<std::size_t>(tri[0])],
+                          vertices[static_cast<std::size_t>(tri[1])],
+                          vertices[static_cast<std::size_t>(tri[2])]);
+      const CellRange r = cell_range(grid, boxes[t]);
+      cell_count[t] = (r.hi[0] - r.lo[0] + 1) * (r.hi[1] - r.lo[1] + 1) * (r.hi[2] - r.lo[2] + 1);
+    }
+  }, true, 4096);
+  std::size_t entries = 0;
+  for (const std::uint32_t c : cell_count) entries += c;
+  if (entries > entry_budget(n)) return false;
+  std::vector<std::uint32_t> start(grid.cells + 1, 0);
   auto for_cells = [&](std::size_t t, auto&& f) {
-    const auto& r = range[t];
-    for (std::uint32_t z = r[2]; z <= r[5]; ++z) {
-      for (std::uint32_t y = r[1]; y <= r[4]; ++y) {
-        for (std::uint32_t x = r[0]; x <= r[3]; ++x) f(key(x, y, z));
+    const CellRange r = cell_range(grid, boxes[t]);
+    for (std::uint32_t z = r.lo[2]; z <= r.hi[2]; ++z) {
+      for (std::uint32_t y = r.lo[1]; y <= r.hi[1]; ++y) {
+        for (std::uint32_t x = r.lo[0]; x <= r.hi[0]; ++x) f(grid.key(x, y, z));
       }
     }
   };
   for (std::size_t t = 0; t < n; ++t) for_cells(t, [&](std::size_t c) { ++start[c + 1]; });
-  for (std::size_t c = 0; c < ncells; ++c) start[c + 1] += start[c];
+  for (std::size_t c = 0; c < grid.cells; ++c) start[c + 1] += start[c];
   std::vector<std::int32_t> items(entries);
   {
     std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
@@ -144,59 +439,60 @@ bool grid_pairs(const std::vector<Aabb>& boxes, const Accept& accept, bool threa
       for_cells(t, [&](std::size_t c) { items[fill[c]++] = static_cast<std::int32_t>(t); });
     }
   }
-  std::vector<std::uint32_t> busy;  // cells holding at least two triangles
-  for (std::size_t c = 0; c < ncells; ++c) {
-    if (start[c + 1] - start[c] >= 2) busy.push_back(static_cast<std::uint32_t>(c));
-  }
   std::atomic<bool> stop{false};
+  std::atomic<std::size_t> visits{0};
+  std::atomic<bool> gave_up{false};
   std::mutex merge;
-  parallel_for_ranges(
-      busy.size(),
-      [&](std::size_t gb, std::size_t ge) {
-        Pairs local;
-        std::vector<Aabb> gathered;
-        std::vector<std::array<std::uint32_t, 3>> low;
-        for (std::size_t g = gb; g < ge; ++g) {
-          if (first_only && stop.load(std::memory_order_relaxed)) break;
-          const std::size_t c = busy[g];
-          const std::uint32_t b = start[c];
-          const std::uint32_t e = start[c + 1];
-          gathered.clear();
-          low.clear();
-          for (std::uint32_t i = b; i < e; ++i) {
-            const auto t = static_cast<std::size_t>(items[i]);
-            gathered.push_back(boxes[t]);
-            low.push_back({range[t][0], range[t][1], range[t][2]});
-          }
-          const std::uint32_t cz = static_cast<std::uint32_t>(c / (static_cast<std::size_t>(dims[0]) * dims[1]));
-          const std::uint32_t cy = static_cast<std::uint32_t>((c / dims[0]) % dims[1]);
-          const std::uint32_t cx = static_cast<std::uint32_t>(c % dims[0]);
-          for (std::uint32_t i = 0; i < e - b; ++i) {
-            const Aabb& bi = gathered[i];
-            const auto& li = low[i];
-            for (std::uint32_t j = i + 1; j < e - b; ++j) {
-              // Owner test first (integers): the lower corner of the boxes' intersection
-              // lies in cell max(lo_i, lo_j), which must be this cell.
-              const auto& lj = low[j];
-              if (std::max(li[0], lj[0]) != cx || std::max(li[1], lj[1]) != cy ||
-                  std::max(li[2], lj[2]) != cz) {
-                continue;
-              }
-              if (!bi.overlaps(gathered[j])) continue;
-              if (accept(items[b + i], items[b + j])) {
-                local.emplace_back(items[b + i], items[b + j]);
-                if (first_only) stop.store(true, std::memory_order_relaxed);
-              }
+  Pairs found;
+  const std::size_t max_visits = visit_budget(n);
+  parallel_for_ranges(n, [&](std::size_t tb, std::size_t te) {
+    Pairs local;
+    std::vector<std::int32_t> candidates;
+    std::size_t chunk_visits = 0;
+    for (std::size_t ts = tb; ts < te; ++ts) {
+      if ((first_only && stop.load(std::memory_order_relaxed)) || gave_up.load(std::memory_order_relaxed)) break;
+      const auto t = static_cast<std::int32_t>(ts);
+      const CellBox& bt = boxes[ts];
+      const CellRange r = cell_range(grid, bt);
+      candidates.clear();
+      for (std::uint32_t z = r.lo[2]; z <= r.hi[2]; ++z) {
+        for (std::uint32_t y = r.lo[1]; y <= r.hi[1]; ++y) {
+          for (std::uint32_t x = r.lo[0]; x <= r.hi[0]; ++x) {
+            const OwnerTest owner{x, y, z, x != r.lo[0], y != r.lo[1], z != r.lo[2]};
+            const std::size_t cell = grid.key(x, y, z);
+            for (std::uint32_t i = start[cell]; i < start[cell + 1]; ++i) {
+              const std::int32_t u = items[i];
+              if (u >= t) break;
+              ++chunk_visits;
+              const CellBox& bu = boxes[static_cast<std::size_t>(u)];
+              if (owner.passes(bu) && boxes_overlap(bt, bu)) candidates.push_back(u);
             }
           }
         }
-        if (!local.empty()) {
-          const std::lock_guard<std::mutex> lock(merge);
-          out.insert(out.end(), local.begin(), local.end());
+      }
+      if (candidates.empty()) continue;
+      const Tri& tri = mesh.triangles[ts];
+      const Plane pt = plane_of(vertices[static_cast<std::size_t>(tri[0])],
+                                vertices[static_cast<std::size_t>(tri[1])],
+                                vertices[static_cast<std::size_t>(tri[2])]);
+      for (const std::int32_t u : candidates) {
+        if (filtered_pair_intersects(vertices, tri, pt, mesh.triangles[static_cast<std::size_t>(u)])) {
+          local.emplace_back(u, t);
+          if (first_only) stop.store(true, std::memory_order_relaxed);
         }
-      },
-      threaded, 64);
-  std::sort(out.begin(), out.end());
+      }
+    }
+    if (visits.fetch_add(chunk_visits, std::memory_order_relaxed) + chunk_visits > max_visits) {
+      gave_up.store(true, std::memory_order_relaxed);
+    }
+    if (!local.empty()) {
+      const std::lock_guard<std::mutex> lock(merge);
+      found.insert(found.end(), local.begin(), local.end());
+    }
+  }, true, 1024);
+  if (gave_up.load()) return false;
+  std::sort(found.begin(), found.end());
+  out = std::move(found);
   return true;
 }
 
@@ -204,18 +500,16 @@ Pairs find_pairs(const TriangleMesh& mesh, const SelfIntersectionOptions& option
   validate_mesh(mesh);
   Pairs out;
   if (mesh.triangles.size() < 2) return out;
-  std::vector<Aabb> boxes(mesh.triangles.size());
-  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
-    const Tri& tri = mesh.triangles[t];
-    boxes[t] = Aabb::of_triangle(mesh.vertices[static_cast<std::size_t>(tri[0])],
-                                 mesh.vertices[static_cast<std::size_t>(tri[1])],
-                                 mesh.vertices[static_cast<std::size_t>(tri[2])]);
+  Grid grid;
+  if (plan_grid(mesh, grid)) {
+    const bool done = options.threaded ? grid_pairs_threaded(mesh, grid, first_only, out)
+                                       : grid_pairs_incremental(mesh, grid, first_only, out);
+    if (done) return out;
   }
   auto accept = [&](std::int32_t i, std::int32_t j) {
     return pair_intersects(mesh.vertices, mesh.triangles[static_cast<std::size_t>(i)],
                            mesh.triangles[static_cast<std::size_t>(j)]);
   };
-  if (grid_pairs(boxes, accept, options.threaded, first_only, out)) return out;
   const TriangleBvh bvh(mesh);
   if (first_only) {
     if (bvh.any_self_pair(accept, options.threaded)) out.emplace_back(-1, -1);
@@ -225,6 +519,7 @@ Pairs find_pairs(const TriangleMesh& mesh, const SelfIntersectionOptions& option
 }
 
 }  // namespace
+
 
 std::vector<std::pair<std::int32_t, std::int32_t>> self_intersections(
     const TriangleMesh& mesh, const SelfIntersectionOptions& options) {
