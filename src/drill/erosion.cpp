@@ -156,14 +156,12 @@ Eroder::Enter Eroder::enter(TetHierarchy& h, const NodeRef& node, std::uint32_t 
       stats.rate_limited = true;
       return Enter::Abort;
     }
-    h.erase(node);
+    const NodeRef top = h.erase(node);  // the topmost ancestor merged into an erased leaf
     stats.removed_volume_mm3 += material;
     ++stats.nodes_removed;
     // Ancestors merged into erased leaves change what lies across their faces too.
     std::uint8_t faces = face_mask;
-    NodeRef top = node;
-    for (; top.depth > 0 && h.state(top.parent()) == NodeState::Erased; top = top.parent())
-      faces = static_cast<std::uint8_t>(faces | m_face_mask[top.depth - 1]);
+    for (int d = node.depth; d > top.depth; --d) faces = static_cast<std::uint8_t>(faces | m_face_mask[d - 1]);
     mark(top, faces);
     return Enter::Done;
   }

@@ -206,7 +206,7 @@ std::uint32_t TetHierarchy::word_at(const NodeRef& node) const noexcept {
   std::uint32_t w = m_root_word[node.root];
   for (int level = 1; level <= node.depth; ++level) {
     if (w == kFull || w == kErased) return w;  // below a leaf: inherit its state
-    w = m_blocks[w][static_cast<std::size_t>(node.slot(level))];
+    w = block(w)[static_cast<std::size_t>(node.slot(level))];
   }
   return w;
 }
@@ -215,7 +215,7 @@ std::uint32_t* TetHierarchy::word_of(const NodeRef& node) noexcept {
   std::uint32_t* w = &m_root_word[node.root];
   for (int level = 1; level <= node.depth; ++level) {
     if (*w == kFull || *w == kErased) return nullptr;
-    w = &m_blocks[*w][static_cast<std::size_t>(node.slot(level))];
+    w = &block(*w)[static_cast<std::size_t>(node.slot(level))];
   }
   return w;
 }
@@ -231,61 +231,68 @@ std::uint32_t TetHierarchy::allocate_block(std::uint32_t fill) {
   std::uint32_t b;
   if (m_free != kNoBlock) {
     b = m_free;
-    m_free = m_blocks[b][0];
+    m_free = block(b)[0];
   } else {
-    if (m_blocks.size() >= kNoBlock) throw Error("drill: node storage exhausted");
-    b = static_cast<std::uint32_t>(m_blocks.size());
-    m_blocks.emplace_back();
+    if (m_block_count >= kNoBlock) throw Error("drill: node storage exhausted");
+    b = static_cast<std::uint32_t>(m_block_count);
+    if ((b & (kBlocksPerPage - 1U)) == 0) m_pages.emplace_back(kBlocksPerPage);  // a new page; none moves
+    ++m_block_count;
   }
-  m_blocks[b].fill(fill);
+  block(b).fill(fill);
   ++m_live_blocks;
   return b;
 }
 
 void TetHierarchy::free_block(std::uint32_t b) {
-  m_blocks[b][0] = m_free;
+  block(b)[0] = m_free;
   m_free = b;
   --m_live_blocks;
 }
 
 void TetHierarchy::free_subtree(std::uint32_t word) {
   if (word == kFull || word == kErased) return;
-  for (std::uint32_t c : m_blocks[word]) free_subtree(c);
+  for (std::uint32_t c : block(word)) free_subtree(c);
   free_block(word);
 }
 
 bool TetHierarchy::refine(const NodeRef& node) {
   if (node.depth >= kMaxDepth) return false;
-  const std::uint32_t* w = word_of(node);
+  std::uint32_t* w = word_of(node);
   if (w == nullptr || *w != kFull) return false;
-  const std::uint32_t b = allocate_block(kFull);  // may reallocate m_blocks
-  *word_of(node) = b;
+  *w = allocate_block(kFull);  // pages never move, so w stays valid
   return true;
 }
 
-void TetHierarchy::erase(const NodeRef& node) {
-  std::uint32_t* w = word_of(node);
-  if (w == nullptr) return;  // below a leaf: nothing to do for erased, refine first for full
+NodeRef TetHierarchy::erase(const NodeRef& node) {
+  // The words on the path from the root, found in one descent (pages never move).
+  std::array<std::uint32_t*, kMaxDepth + 1> path{};
+  std::uint32_t* w = &m_root_word[node.root];
+  path[0] = w;
+  for (int level = 1; level <= node.depth; ++level) {
+    if (*w == kFull || *w == kErased) return node;  // below a leaf: nothing to do for erased, refine first for full
+    w = &block(*w)[static_cast<std::size_t>(node.slot(level))];
+    path[static_cast<std::size_t>(level)] = w;
+  }
   free_subtree(*w);
   *w = kErased;
   // Merge fully erased sibling blocks upward.
   NodeRef n = node;
   while (n.depth > 0) {
-    const NodeRef p = n.parent();
-    std::uint32_t* pw = word_of(p);
+    std::uint32_t* pw = path[static_cast<std::size_t>(n.depth - 1)];
     const std::uint32_t b = *pw;
-    const Block& blk = m_blocks[b];
+    const Block& blk = block(b);
     if (!std::all_of(blk.begin(), blk.end(), [](std::uint32_t c) { return c == kErased; })) break;
     free_block(b);
     *pw = kErased;
-    n = p;
+    n = n.parent();
   }
+  return n;
 }
 
 bool TetHierarchy::coarsen(const NodeRef& node) {
   std::uint32_t* w = word_of(node);
   if (w == nullptr || *w == kFull || *w == kErased) return false;
-  const Block& blk = m_blocks[*w];
+  const Block& blk = block(*w);
   if (!std::all_of(blk.begin(), blk.end(), [](std::uint32_t c) { return c == kFull; })) return false;
   free_block(*w);
   *w = kFull;
@@ -406,7 +413,7 @@ Location TetHierarchy::descend(std::uint32_t root, const std::array<double, 4>& 
     const int s = TreeTable::locate_child(lambda);
     lambda = t.to_child_coordinates(s, lambda);
     loc.leaf = loc.leaf.child(s);
-    w = m_blocks[w][static_cast<std::size_t>(s)];
+    w = block(w)[static_cast<std::size_t>(s)];
   }
   loc.state = w == kFull ? NodeState::Full : NodeState::Erased;
   return loc;

@@ -235,6 +235,71 @@ TEST(TetHierarchy, RefineEraseMergeAndReuseMemory) {
   EXPECT_TRUE(test::rel_near(h.material_volume(), 1000.0 - h.root_volume(3), 1e-12));
 }
 
+// Refines every leaf of root r down to `depth`.
+void refine_all(TetHierarchy& h, std::uint32_t r, int depth) {
+  std::vector<NodeRef> leaves;
+  for (int d = 0; d < depth; ++d) {
+    leaves.clear();
+    h.for_each_leaf(r, [&](const NodeRef& n, NodeState s) {
+      if (s == NodeState::Full) leaves.push_back(n);
+    });
+    for (const NodeRef& n : leaves) ASSERT_TRUE(h.refine(n));
+  }
+}
+
+TEST(TetHierarchy, BlocksSpanningSeveralPagesKeepTheirWordsThroughErasureReuseAndCopy) {
+  // 12 roots refined to depth 4: 12 × 585 = 7020 blocks, beyond the first page of 4096.
+  TetHierarchy h(make_cube12(10.0));
+  for (std::uint32_t r = 0; r < 12; ++r) refine_all(h, r, 4);
+  ASSERT_EQ(h.live_blocks(), 7020U);
+  EXPECT_EQ(h.node_count(), 12U + 8U * 7020U);
+  std::size_t leaves = 0;
+  double sum = 0.0;
+  for (std::size_t r = 0; r < h.root_count(); ++r)
+    h.for_each_leaf(r, [&](const NodeRef& n, NodeState s) {
+      EXPECT_EQ(s, NodeState::Full);
+      EXPECT_EQ(n.depth, 4);
+      ++leaves;
+      sum += h.node_volume(n);
+    });
+  EXPECT_EQ(leaves, 12U * 4096U);
+  EXPECT_TRUE(test::rel_near(sum, 1000.0, 1e-12));
+  const TetHierarchy copy = h;
+  // Erase root 11's leaves (its blocks lie in the second page): each erase reports the
+  // topmost node that became an erased leaf, the last one the root itself.
+  std::vector<NodeRef> last;
+  h.for_each_leaf(11, [&](const NodeRef& n, NodeState) { last.push_back(n); });
+  std::size_t merged_to_root = 0;
+  for (std::size_t i = 0; i < last.size(); ++i) {
+    const NodeRef top = h.erase(last[i]);
+    if (i % 8 != 7) {
+      EXPECT_EQ(top, last[i]);  // siblings left: nothing merges
+    } else {
+      EXPECT_LT(top.depth, last[i].depth);
+      EXPECT_EQ(h.state(top), NodeState::Erased);
+      if (top.depth > 0) {
+        EXPECT_EQ(h.state(top.parent()), NodeState::Internal);
+      }
+    }
+    if (top.depth == 0) ++merged_to_root;
+  }
+  EXPECT_EQ(merged_to_root, 1U);
+  EXPECT_EQ(h.state({11, 0, 0}), NodeState::Erased);
+  EXPECT_EQ(h.live_blocks(), 11U * 585U);
+  EXPECT_EQ(h.free_blocks(), 585U);
+  EXPECT_TRUE(test::rel_near(h.material_volume(), 1000.0 - h.root_volume(11), 1e-12));
+  // The copy kept its own words.
+  EXPECT_TRUE(test::rel_near(copy.material_volume(), 1000.0, 1e-12));
+  EXPECT_EQ(copy.live_blocks(), 7020U);
+  // Refining root 10's 4096 leaves takes the 585 freed blocks first, then grows the storage
+  // by the other 3511 (into a new page).
+  const std::size_t storage = h.node_storage_bytes();
+  refine_all(h, 10, 1);
+  EXPECT_EQ(h.free_blocks(), 0U);
+  EXPECT_EQ(h.node_storage_bytes(), storage + 3511U * 32U);
+  EXPECT_TRUE(test::rel_near(h.material_volume(), 1000.0 - h.root_volume(11), 1e-12));
+}
+
 TEST(TetHierarchy, LeafVolumesSumToRootAfterDeepRefinement) {
   TetHierarchy h(make_cube(2.0));
   std::mt19937 rng(5);

@@ -86,6 +86,8 @@ struct HierarchyOptions {
 /// is the root of a tree of Bey red refinements (TreeTable). Node storage is one 32-bit
 /// word per node: kFull, kErased, or the index of the block of its 8 children's words.
 /// Blocks of erased siblings merge back into their parent and return to a free list.
+/// Blocks live in fixed pages of kBlocksPerPage, so growing the storage never moves (copies)
+/// the blocks already in use: a refinement costs O(1) even when the storage grows.
 /// Geometry is never stored: it is computed from the root and the node's path.
 ///
 /// Not thread-safe: one thread (the collision/erosion thread) owns it.
@@ -123,7 +125,7 @@ class TetHierarchy {
   [[nodiscard]] std::uint32_t root_word(std::size_t r) const noexcept { return m_root_word[r]; }
   /// Word of child slot @p s of an internal node whose word is @p word.
   [[nodiscard]] std::uint32_t child_word(std::uint32_t word, int s) const noexcept {
-    return m_blocks[word][static_cast<std::size_t>(s)];
+    return block(word)[static_cast<std::size_t>(s)];
   }
   /// The state a storage word stands for.
   [[nodiscard]] static NodeState state_of_word(std::uint32_t word) noexcept {
@@ -133,8 +135,10 @@ class TetHierarchy {
   /// is not a full leaf or is at kMaxDepth.
   bool refine(const NodeRef& node);
   /// Removes the node's material: the node becomes an erased leaf, its subtree's blocks are
-  /// freed, and ancestors whose 8 children are all erased merge into erased leaves.
-  void erase(const NodeRef& node);
+  /// freed, and ancestors whose 8 children are all erased merge into erased leaves. Returns
+  /// the topmost node that became an erased leaf (@p node itself when nothing merged, or
+  /// when it lies below a leaf and nothing was done).
+  NodeRef erase(const NodeRef& node);
   /// Undoes a refinement that removed nothing: an internal node whose 8 children are all
   /// full leaves becomes a full leaf again. Returns true if it did.
   bool coarsen(const NodeRef& node);
@@ -184,7 +188,7 @@ class TetHierarchy {
         f(it.node, NodeState::Erased);
       } else {
         for (int s = 7; s >= 0; --s) {
-          stack[static_cast<std::size_t>(top++)] = {it.node.child(s), m_blocks[it.word][static_cast<std::size_t>(s)]};
+          stack[static_cast<std::size_t>(top++)] = {it.node.child(s), block(it.word)[static_cast<std::size_t>(s)]};
         }
       }
     }
@@ -199,7 +203,7 @@ class TetHierarchy {
   [[nodiscard]] std::size_t node_count() const noexcept { return m_roots.size() + 8 * m_live_blocks; }
   /// Bytes of node storage: one word per root plus every allocated block (free ones too).
   [[nodiscard]] std::size_t node_storage_bytes() const noexcept {
-    return m_root_word.size() * sizeof(std::uint32_t) + m_blocks.size() * sizeof(Block);
+    return m_root_word.size() * sizeof(std::uint32_t) + m_block_count * sizeof(Block);
   }
   /// Bytes per live node: (root words + blocks in use) / node_count() — 4 by construction.
   [[nodiscard]] double bytes_per_node() const noexcept {
@@ -212,7 +216,7 @@ class TetHierarchy {
   }
   /// Child blocks in use / on the free list.
   [[nodiscard]] std::size_t live_blocks() const noexcept { return m_live_blocks; }
-  [[nodiscard]] std::size_t free_blocks() const noexcept { return m_blocks.size() - m_live_blocks; }
+  [[nodiscard]] std::size_t free_blocks() const noexcept { return m_block_count - m_live_blocks; }
   /// Sum of the volumes of full leaves (mm³).
   [[nodiscard]] double material_volume() const;
   /// Sum of the root volumes (mm³).
@@ -226,6 +230,13 @@ class TetHierarchy {
  private:
   using Block = std::array<std::uint32_t, 8>;
   static constexpr std::uint32_t kNoBlock = 0xFFFFFFFDU;
+  static constexpr int kPageShift = 12;
+  static constexpr std::uint32_t kBlocksPerPage = 1U << kPageShift;  // 128 KiB pages
+
+  [[nodiscard]] const Block& block(std::uint32_t b) const noexcept {
+    return m_pages[b >> kPageShift][b & (kBlocksPerPage - 1U)];
+  }
+  [[nodiscard]] Block& block(std::uint32_t b) noexcept { return m_pages[b >> kPageShift][b & (kBlocksPerPage - 1U)]; }
 
   [[nodiscard]] Location descend(std::uint32_t root, const std::array<double, 4>& root_lambda) const noexcept;
   [[nodiscard]] bool outside_root_box(std::size_t r, const Vec3& p_mm) const noexcept;
@@ -251,7 +262,8 @@ class TetHierarchy {
   geometry::SpatialHash m_hash;
 
   std::vector<std::uint32_t> m_root_word;
-  std::vector<Block> m_blocks;
+  std::vector<std::vector<Block>> m_pages;  // each of kBlocksPerPage blocks, never resized
+  std::size_t m_block_count = 0;            // blocks handed out so far (live + free)
   std::uint32_t m_free = kNoBlock;
   std::size_t m_live_blocks = 0;
 };
