@@ -7,7 +7,9 @@
 #include <bit>
 #include <cmath>
 #include <limits>
-#include <mutex>
+#include <memory>
+
+#include <tbb/task_arena.h>
 
 #include "ido/core/parallel.h"
 #include "ido/geometry/aabb.h"
@@ -335,162 +337,191 @@ struct OwnerTest {
   }
 };
 
-/// Single-threaded search in one pass: each triangle is tested against the triangles
-/// inserted before it into the cells of its box, then inserted (cells hold linked lists).
-/// With @p first_only it stops at the first intersecting pair, having touched only the
-/// triangles before it. Returns false (out untouched) when the grid gives up.
-bool grid_pairs_incremental(const TriangleMesh& mesh, const Grid& grid, bool first_only, Pairs& out) {
-  const std::size_t n = mesh.triangles.size();
-  const auto& vertices = mesh.vertices;
-  std::vector<std::uint32_t> head(grid.cells, 0);  // entry index + 1; 0: empty cell
-  struct Entry {
-    std::uint32_t next;  // entry index + 1 of the next (earlier) entry of the cell; 0: none
-    std::int32_t triangle;
-  };
-  std::vector<Entry> entries;
-  entries.reserve(4 * n);
-  std::vector<CellBox> boxes(n);
-  std::vector<std::int32_t> candidates;
-  const std::size_t max_entries = entry_budget(n);
-  const std::size_t max_visits = visit_budget(n);
-  std::size_t visits = 0;
-  Pairs found;
-  for (std::size_t ts = 0; ts < n; ++ts) {
-    const auto t = static_cast<std::int32_t>(ts);
-    const Tri& tri = mesh.triangles[ts];
-    const Vec3& a = vertices[static_cast<std::size_t>(tri[0])];
-    const Vec3& b = vertices[static_cast<std::size_t>(tri[1])];
-    const Vec3& c = vertices[static_cast<std::size_t>(tri[2])];
-    const CellBox bt = cell_box(grid, a, b, c);
-    boxes[ts] = bt;
-    const CellRange r = cell_range(grid, bt);
-    candidates.clear();
+/// Linked lists of triangles per grid cell, filled incrementally: head[cell] is the last
+/// entry inserted into the cell (index + 1; 0 for none), each entry links to the one before.
+class CellLists {
+ public:
+  CellLists(const Grid& grid, std::size_t expected_entries) : m_head(grid.cells, 0) {
+    m_entries.reserve(expected_entries);
+  }
+
+  /// Appends to @p candidates every triangle u of the lists whose float box overlaps @p bt
+  /// (cells @p r) and whose pair with t is owned by the cell where it is seen (so each pair
+  /// once). With kInsert, also inserts triangle @p t into every cell of @p r. Returns the
+  /// number of list entries visited.
+  template <bool kInsert>
+  std::size_t visit(const Grid& grid, const std::vector<CellBox>& boxes, const CellBox& bt,
+                    const CellRange& r, std::int32_t t, std::vector<std::int32_t>& candidates) {
+    std::size_t visits = 0;
     for (std::uint32_t z = r.lo[2]; z <= r.hi[2]; ++z) {
       for (std::uint32_t y = r.lo[1]; y <= r.hi[1]; ++y) {
         for (std::uint32_t x = r.lo[0]; x <= r.hi[0]; ++x) {
           const OwnerTest owner{x, y, z, x != r.lo[0], y != r.lo[1], z != r.lo[2]};
-          std::uint32_t& cell_head = head[grid.key(x, y, z)];
+          std::uint32_t& cell_head = m_head[grid.key(x, y, z)];
           for (std::uint32_t e = cell_head; e != 0;) {
-            const Entry entry = entries[e - 1];
+            const Entry entry = m_entries[e - 1];
             e = entry.next;
             ++visits;
             const CellBox& bu = boxes[static_cast<std::size_t>(entry.triangle)];
             if (owner.passes(bu) && boxes_overlap(bt, bu)) candidates.push_back(entry.triangle);
           }
-          entries.push_back({cell_head, t});
-          cell_head = static_cast<std::uint32_t>(entries.size());
-        }
-      }
-    }
-    if (entries.size() > max_entries || visits > max_visits) return false;
-    if (candidates.empty()) continue;
-    const Plane pt = plane_of(a, b, c);
-    for (const std::int32_t u : candidates) {
-      if (filtered_pair_intersects(vertices, tri, pt, mesh.triangles[static_cast<std::size_t>(u)])) {
-        found.emplace_back(u, t);
-        if (first_only) {
-          out = std::move(found);
-          return true;
-        }
-      }
-    }
-  }
-  std::sort(found.begin(), found.end());
-  out = std::move(found);
-  return true;
-}
-
-/// Multi-threaded search: boxes in parallel, cells filled by a counting sort (triangles
-/// ascending in each cell), then each triangle against the lower-numbered triangles of its
-/// cells, in parallel. With @p first_only every chunk checks a shared stop flag.
-bool grid_pairs_threaded(const TriangleMesh& mesh, const Grid& grid, bool first_only, Pairs& out) {
-  const std::size_t n = mesh.triangles.size();
-  const auto& vertices = mesh.vertices;
-  std::vector<CellBox> boxes(n);
-  std::vector<std::uint32_t> cell_count(n);
-  parallel_for_ranges(n, [&](std::size_t b, std::size_t e) {
-    for (std::size_t t = b; t < e; ++t) {
-      const Tri& tri = mesh.triangles[t];
-      boxes[t] = cell_box(grid, vertices[static_cast<std::size_t>(tri[0])],
-                          vertices[static_cast<std::size_t>(tri[1])],
-                          vertices[static_cast<std::size_t>(tri[2])]);
-      const CellRange r = cell_range(grid, boxes[t]);
-      cell_count[t] = (r.hi[0] - r.lo[0] + 1) * (r.hi[1] - r.lo[1] + 1) * (r.hi[2] - r.lo[2] + 1);
-    }
-  }, true, 4096);
-  std::size_t entries = 0;
-  for (const std::uint32_t c : cell_count) entries += c;
-  if (entries > entry_budget(n)) return false;
-  std::vector<std::uint32_t> start(grid.cells + 1, 0);
-  auto for_cells = [&](std::size_t t, auto&& f) {
-    const CellRange r = cell_range(grid, boxes[t]);
-    for (std::uint32_t z = r.lo[2]; z <= r.hi[2]; ++z) {
-      for (std::uint32_t y = r.lo[1]; y <= r.hi[1]; ++y) {
-        for (std::uint32_t x = r.lo[0]; x <= r.hi[0]; ++x) f(grid.key(x, y, z));
-      }
-    }
-  };
-  for (std::size_t t = 0; t < n; ++t) for_cells(t, [&](std::size_t c) { ++start[c + 1]; });
-  for (std::size_t c = 0; c < grid.cells; ++c) start[c + 1] += start[c];
-  std::vector<std::int32_t> items(entries);
-  {
-    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
-    for (std::size_t t = 0; t < n; ++t) {
-      for_cells(t, [&](std::size_t c) { items[fill[c]++] = static_cast<std::int32_t>(t); });
-    }
-  }
-  std::atomic<bool> stop{false};
-  std::atomic<std::size_t> visits{0};
-  std::atomic<bool> gave_up{false};
-  std::mutex merge;
-  Pairs found;
-  const std::size_t max_visits = visit_budget(n);
-  parallel_for_ranges(n, [&](std::size_t tb, std::size_t te) {
-    Pairs local;
-    std::vector<std::int32_t> candidates;
-    std::size_t chunk_visits = 0;
-    for (std::size_t ts = tb; ts < te; ++ts) {
-      if ((first_only && stop.load(std::memory_order_relaxed)) || gave_up.load(std::memory_order_relaxed)) break;
-      const auto t = static_cast<std::int32_t>(ts);
-      const CellBox& bt = boxes[ts];
-      const CellRange r = cell_range(grid, bt);
-      candidates.clear();
-      for (std::uint32_t z = r.lo[2]; z <= r.hi[2]; ++z) {
-        for (std::uint32_t y = r.lo[1]; y <= r.hi[1]; ++y) {
-          for (std::uint32_t x = r.lo[0]; x <= r.hi[0]; ++x) {
-            const OwnerTest owner{x, y, z, x != r.lo[0], y != r.lo[1], z != r.lo[2]};
-            const std::size_t cell = grid.key(x, y, z);
-            for (std::uint32_t i = start[cell]; i < start[cell + 1]; ++i) {
-              const std::int32_t u = items[i];
-              if (u >= t) break;
-              ++chunk_visits;
-              const CellBox& bu = boxes[static_cast<std::size_t>(u)];
-              if (owner.passes(bu) && boxes_overlap(bt, bu)) candidates.push_back(u);
-            }
+          if constexpr (kInsert) {
+            m_entries.push_back({cell_head, t});
+            cell_head = static_cast<std::uint32_t>(m_entries.size());
           }
         }
       }
-      if (candidates.empty()) continue;
-      const Tri& tri = mesh.triangles[ts];
-      const Plane pt = plane_of(vertices[static_cast<std::size_t>(tri[0])],
-                                vertices[static_cast<std::size_t>(tri[1])],
-                                vertices[static_cast<std::size_t>(tri[2])]);
-      for (const std::int32_t u : candidates) {
-        if (filtered_pair_intersects(vertices, tri, pt, mesh.triangles[static_cast<std::size_t>(u)])) {
-          local.emplace_back(u, t);
-          if (first_only) stop.store(true, std::memory_order_relaxed);
+    }
+    return visits;
+  }
+
+  [[nodiscard]] std::size_t entries() const { return m_entries.size(); }
+
+ private:
+  struct Entry {
+    std::uint32_t next;  // index + 1 of the cell's previous entry; 0: none
+    std::int32_t triangle;
+  };
+  std::vector<std::uint32_t> m_head;
+  std::vector<Entry> m_entries;
+};
+
+/// Shared state of one search: the mesh, the grid, every triangle's box, the stop flags.
+struct Search {
+  const TriangleMesh& mesh;
+  const Grid& grid;
+  bool first_only;
+  std::vector<CellBox> boxes;
+  std::atomic<bool> stop{false};      // first_only and a pair was found
+  std::atomic<bool> gave_up{false};   // a work budget was exceeded: use the BVH instead
+  std::size_t max_entries;            // per block
+  std::size_t max_visits;             // per block pass
+
+  [[nodiscard]] bool halted() const {
+    return gave_up.load(std::memory_order_relaxed) ||
+           (first_only && stop.load(std::memory_order_relaxed));
+  }
+
+  /// Narrow phase of t against @p candidates (all lower-numbered); appends hits (u, t).
+  void test(std::int32_t t, const std::vector<std::int32_t>& candidates, Pairs& hits) {
+    const auto& vertices = mesh.vertices;
+    const Tri& tri = mesh.triangles[static_cast<std::size_t>(t)];
+    const Plane pt = plane_of(vertices[static_cast<std::size_t>(tri[0])],
+                              vertices[static_cast<std::size_t>(tri[1])],
+                              vertices[static_cast<std::size_t>(tri[2])]);
+    for (const std::int32_t u : candidates) {
+      if (filtered_pair_intersects(vertices, tri, pt, mesh.triangles[static_cast<std::size_t>(u)])) {
+        hits.emplace_back(u, t);
+        if (first_only) {
+          stop.store(true, std::memory_order_relaxed);
+          return;
         }
       }
     }
-    if (visits.fetch_add(chunk_visits, std::memory_order_relaxed) + chunk_visits > max_visits) {
-      gave_up.store(true, std::memory_order_relaxed);
+  }
+
+  /// Incremental pass over triangles [begin, end): each is boxed, tested against the block's
+  /// earlier triangles in the cells of its box, then inserted there.
+  void block_pass(CellLists& lists, std::size_t begin, std::size_t end, Pairs& hits) {
+    std::vector<std::int32_t> candidates;
+    std::size_t visits = 0;
+    const auto& vertices = mesh.vertices;
+    for (std::size_t ts = begin; ts < end; ++ts) {
+      if ((ts & 255) == 0 && halted()) return;
+      const Tri& tri = mesh.triangles[ts];
+      const CellBox bt = cell_box(grid, vertices[static_cast<std::size_t>(tri[0])],
+                                  vertices[static_cast<std::size_t>(tri[1])],
+                                  vertices[static_cast<std::size_t>(tri[2])]);
+      boxes[ts] = bt;
+      candidates.clear();
+      const auto t = static_cast<std::int32_t>(ts);
+      visits += lists.visit<true>(grid, boxes, bt, cell_range(grid, bt), t, candidates);
+      if (lists.entries() > max_entries || visits > max_visits) {
+        gave_up.store(true, std::memory_order_relaxed);
+        return;
+      }
+      if (!candidates.empty()) {
+        test(t, candidates, hits);
+        if (first_only && !hits.empty()) return;
+      }
     }
-    if (!local.empty()) {
-      const std::lock_guard<std::mutex> lock(merge);
-      found.insert(found.end(), local.begin(), local.end());
+  }
+
+  /// Triangles [begin, end) (boxes known) against the finished lists of an earlier block.
+  void cross_pass(const std::vector<CellLists*>& earlier, std::size_t begin, std::size_t end,
+                  Pairs& hits) {
+    std::vector<std::int32_t> candidates;
+    std::size_t visits = 0;
+    for (std::size_t ts = begin; ts < end; ++ts) {
+      if ((ts & 255) == 0 && halted()) return;
+      const CellBox& bt = boxes[ts];
+      const CellRange r = cell_range(grid, bt);
+      const auto t = static_cast<std::int32_t>(ts);
+      candidates.clear();
+      for (CellLists* lists : earlier) visits += lists->visit<false>(grid, boxes, bt, r, t, candidates);
+      if (visits > max_visits) {
+        gave_up.store(true, std::memory_order_relaxed);
+        return;
+      }
+      if (!candidates.empty()) {
+        test(t, candidates, hits);
+        if (first_only && !hits.empty()) return;
+      }
     }
-  }, true, 1024);
-  if (gave_up.load()) return false;
+  }
+};
+
+/// The search on the grid. Single-threaded: one incremental pass over all triangles (with
+/// first_only it stops at the first intersecting pair, having touched only the triangles
+/// before it). Threaded: the triangles are cut into one index block per worker; each block
+/// runs its own incremental pass in parallel, then every block's triangles are tested against
+/// the finished lists of the blocks before it, in parallel chunks. Returns false (out
+/// untouched) when the grid gives up.
+bool grid_pairs(const TriangleMesh& mesh, const Grid& grid, bool threaded, bool first_only, Pairs& out) {
+  const std::size_t n = mesh.triangles.size();
+  std::size_t blocks = 1;
+  if (threaded) {
+    const auto workers = static_cast<std::size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
+    blocks = std::clamp<std::size_t>(n / 8192, 1, workers);
+  }
+  Search search{mesh, grid, first_only, std::vector<CellBox>(n), {}, {}, entry_budget(n / blocks + 1),
+                visit_budget(n / blocks + 1)};
+  auto block_begin = [&](std::size_t b) { return b * n / blocks; };
+  std::vector<std::unique_ptr<CellLists>> lists(blocks);
+  std::vector<Pairs> hits(blocks);
+  parallel_for(
+      blocks,
+      [&](std::size_t b) {
+        lists[b] = std::make_unique<CellLists>(grid, 4 * (block_begin(b + 1) - block_begin(b)));
+        search.block_pass(*lists[b], block_begin(b), block_begin(b + 1), hits[b]);
+      },
+      threaded, 1);
+  Pairs found;
+  for (const Pairs& h : hits) found.insert(found.end(), h.begin(), h.end());
+  if (blocks > 1 && !search.halted()) {
+    // Cross pass: block j (j ≥ 1) against blocks 0 … j − 1, in chunks of its triangles.
+    constexpr std::size_t kChunk = 2048;
+    struct Chunk {
+      std::size_t block, begin, end;
+    };
+    std::vector<Chunk> chunks;
+    for (std::size_t j = 1; j < blocks; ++j) {
+      for (std::size_t b = block_begin(j); b < block_begin(j + 1); b += kChunk) {
+        chunks.push_back({j, b, std::min(b + kChunk, block_begin(j + 1))});
+      }
+    }
+    std::vector<Pairs> cross(chunks.size());
+    parallel_for(
+        chunks.size(),
+        [&](std::size_t c) {
+          std::vector<CellLists*> earlier;
+          for (std::size_t i = 0; i < chunks[c].block; ++i) earlier.push_back(lists[i].get());
+          search.cross_pass(earlier, chunks[c].begin, chunks[c].end, cross[c]);
+        },
+        threaded, 1);
+    for (const Pairs& h : cross) found.insert(found.end(), h.begin(), h.end());
+  }
+  if (search.gave_up.load()) return false;
   std::sort(found.begin(), found.end());
   out = std::move(found);
   return true;
@@ -502,9 +533,7 @@ Pairs find_pairs(const TriangleMesh& mesh, const SelfIntersectionOptions& option
   if (mesh.triangles.size() < 2) return out;
   Grid grid;
   if (plan_grid(mesh, grid)) {
-    const bool done = options.threaded ? grid_pairs_threaded(mesh, grid, first_only, out)
-                                       : grid_pairs_incremental(mesh, grid, first_only, out);
-    if (done) return out;
+    if (grid_pairs(mesh, grid, options.threaded, first_only, out)) return out;
   }
   auto accept = [&](std::int32_t i, std::int32_t j) {
     return pair_intersects(mesh.vertices, mesh.triangles[static_cast<std::size_t>(i)],
