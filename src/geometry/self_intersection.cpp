@@ -476,9 +476,9 @@ struct Search {
 /// before it). Threaded: the triangles are cut into one index block per worker; each block
 /// runs its own incremental pass in parallel, then every block's triangles are tested against
 /// the finished lists of the blocks before it, in parallel chunks. Returns false (out
-/// untouched) when the grid gives up.
-bool grid_pairs(const TriangleMesh& mesh, const Grid& grid, bool threaded, bool first_only, Pairs& out) {
-  const std::size_t n = mesh.triangles.size();
+/// untouched) when the grid gives up. Only the first @p n triangles take part.
+bool grid_pairs(const TriangleMesh& mesh, const Grid& grid, bool threaded, bool first_only,
+                std::size_t n, Pairs& out) {
   std::size_t blocks = 1;
   if (threaded) {
     const auto workers = static_cast<std::size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
@@ -527,13 +527,90 @@ bool grid_pairs(const TriangleMesh& mesh, const Grid& grid, bool threaded, bool 
   return true;
 }
 
+/// Whether consecutive triangles of the mesh tend to lie near each other (as from a
+/// subdivision, a marching-cubes sweep or a strip-wise parameterisation): over a sample of
+/// consecutive pairs, the share whose first corners are at most one cell apart per axis.
+bool index_order_is_local(const TriangleMesh& mesh, const Grid& grid) {
+  const std::size_t n = mesh.triangles.size();
+  const std::size_t samples = std::min<std::size_t>(n - 1, 1024);
+  auto cell_of = [&](std::size_t t, int k) {
+    const Vec3& v = mesh.vertices[static_cast<std::size_t>(mesh.triangles[t][0])];
+    return static_cast<int>(grid.cell(static_cast<float>(v[k]), k));
+  };
+  std::size_t near = 0;
+  for (std::size_t s = 0; s < samples; ++s) {
+    const std::size_t t = s * (n - 1) / samples;
+    near += std::abs(cell_of(t, 0) - cell_of(t + 1, 0)) <= 1 && std::abs(cell_of(t, 1) - cell_of(t + 1, 1)) <= 1 &&
+            std::abs(cell_of(t, 2) - cell_of(t + 1, 2)) <= 1;
+  }
+  return 2 * near >= samples;
+}
+
+/// A copy of @p mesh (vertices and triangles only) with the triangles in grid-cell order
+/// (row-major cell of the first corner, a counting sort) and the vertices renumbered in order
+/// of first use, so that the search walks memory in order; order[s] is the original id of
+/// triangle s. Sharing of vertex indices is unchanged (the renumbering is a bijection on the
+/// used vertices).
+TriangleMesh spatially_sorted(const TriangleMesh& mesh, const Grid& grid, std::vector<std::int32_t>& order) {
+  const std::size_t n = mesh.triangles.size();
+  std::vector<std::uint32_t> key(n);
+  std::vector<std::uint32_t> start(grid.cells + 1, 0);
+  for (std::size_t t = 0; t < n; ++t) {
+    const Vec3& v = mesh.vertices[static_cast<std::size_t>(mesh.triangles[t][0])];
+    key[t] = static_cast<std::uint32_t>(grid.key(grid.cell(static_cast<float>(v.x()), 0),
+                                                 grid.cell(static_cast<float>(v.y()), 1),
+                                                 grid.cell(static_cast<float>(v.z()), 2)));
+    ++start[key[t] + 1];
+  }
+  for (std::size_t c = 0; c < grid.cells; ++c) start[c + 1] += start[c];
+  order.assign(n, 0);
+  for (std::size_t t = 0; t < n; ++t) order[start[key[t]]++] = static_cast<std::int32_t>(t);
+  TriangleMesh sorted;
+  sorted.triangles.resize(n);
+  std::vector<std::int32_t> new_id(mesh.vertices.size(), -1);
+  sorted.vertices.reserve(mesh.vertices.size());
+  for (std::size_t s = 0; s < n; ++s) {
+    const Tri& t = mesh.triangles[static_cast<std::size_t>(order[s])];
+    for (std::size_t k = 0; k < 3; ++k) {
+      std::int32_t& id = new_id[static_cast<std::size_t>(t[k])];
+      if (id < 0) {
+        id = static_cast<std::int32_t>(sorted.vertices.size());
+        sorted.vertices.push_back(mesh.vertices[static_cast<std::size_t>(t[k])]);
+      }
+      sorted.triangles[s][k] = id;
+    }
+  }
+  return sorted;
+}
+
 Pairs find_pairs(const TriangleMesh& mesh, const SelfIntersectionOptions& options, bool first_only) {
   validate_mesh(mesh);
   Pairs out;
   if (mesh.triangles.size() < 2) return out;
   Grid grid;
   if (plan_grid(mesh, grid)) {
-    if (grid_pairs(mesh, grid, options.threaded, first_only, out)) return out;
+    const std::size_t n = mesh.triangles.size();
+    if (index_order_is_local(mesh, grid)) {
+      if (grid_pairs(mesh, grid, options.threaded, first_only, n, out)) return out;
+    } else {
+      // Without index locality the search runs on a spatially sorted copy. An early-exit
+      // query first probes a prefix in input order (a sixteenth of the triangles, cheap while
+      // the grid is sparse): a mesh with many intersecting pairs shows one there, before the
+      // sort is paid for.
+      if (first_only && grid_pairs(mesh, grid, false, true, n / 16, out) && !out.empty()) return out;
+      out.clear();
+      std::vector<std::int32_t> order;
+      const TriangleMesh sorted = spatially_sorted(mesh, grid, order);
+      if (grid_pairs(sorted, grid, options.threaded, first_only, n, out)) {
+        for (auto& [u, t] : out) {
+          u = order[static_cast<std::size_t>(u)];
+          t = order[static_cast<std::size_t>(t)];
+          if (u > t) std::swap(u, t);
+        }
+        std::sort(out.begin(), out.end());
+        return out;
+      }
+    }
   }
   auto accept = [&](std::int32_t i, std::int32_t j) {
     return pair_intersects(mesh.vertices, mesh.triangles[static_cast<std::size_t>(i)],
