@@ -46,6 +46,7 @@ struct DrillOptions {
   double removal_rate = 0.0;
   double stiffness = 1.5;
   std::int64_t visit_budget = -1;  // -1: the library default
+  int haptic_priority = drill::SimulatorOptions{}.haptic_realtime_priority;
   std::string snapshots;
   double snapshot_every_s = 0.5;
   std::string snapshot_size = "640x480";
@@ -74,6 +75,10 @@ void run(const DrillOptions& o, const GlobalOptions& /*g*/) {
   if (!o.max_depth && o.min_size_mm == 0.0) so.erosion.min_size_mm = so.tool.burr_radius_mm / 4.0;
   so.coupling.stiffness_n_per_mm = o.stiffness;
   if (o.visit_budget >= 0) so.erosion.max_node_visits = static_cast<std::size_t>(o.visit_budget);
+  if (o.haptic_priority < 0 || o.haptic_priority > 99) {
+    throw InvalidInput(fmt::format("--haptic-priority must be between 0 and 99, got {}", o.haptic_priority));
+  }
+  so.haptic_realtime_priority = o.haptic_priority;
   SnapshotOptions picture;  // one camera for every picture, looking down at 50°
   picture.azimuth_deg = 30.0;
   picture.elevation_deg = 50.0;
@@ -152,6 +157,9 @@ void setup(CLI::App& app, const GlobalOptions& g) {
   sub->add_option("--stiffness", opts->stiffness, "Coupling stiffness (N/mm, default 1.5)");
   sub->add_option("--visit-budget", opts->visit_budget,
                   "Erosion work per collision update (node visits; 0 = unlimited; default 6000), the rest carries over");
+  sub->add_option("--haptic-priority", opts->haptic_priority,
+                  "SCHED_FIFO priority asked for the haptic thread (1-99; 0 = ordinary scheduling; default 80; "
+                  "refused without CAP_SYS_NICE, see haptic_realtime in the report)");
   sub->add_option("--snapshots", opts->snapshots, "Folder for pictures of the drilled surface: snapshot_0000.png, ...");
   sub->add_option("--snapshot-every", opts->snapshot_every_s, "Seconds of the path between pictures (default 0.5)");
   sub->add_option("--snapshot-size", opts->snapshot_size, "Picture size WIDTHxHEIGHT in pixels (default 640x480)");

@@ -26,6 +26,7 @@ nlohmann::json drill_session_json(const drill::TetHierarchy& hierarchy, const dr
   r["force_compute_ms"] = times_ms(drill::percentiles(st.force_compute_time_s));
   r["haptic_ticks"] = st.haptic_ticks;
   r["missed_1ms_deadlines"] = st.missed_deadlines;
+  r["haptic_realtime"] = st.haptic_realtime;
   r["collision_updates"] = st.collision_updates;
   r["render_snapshots"] = st.render_snapshots;
   r["force"] = {{"peak_n", st.peak_force_n}, {"mean_in_contact_n", st.mean_force_n},

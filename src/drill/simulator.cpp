@@ -5,6 +5,10 @@
 #include <chrono>
 #include <cmath>
 #include <thread>
+#if defined(__linux__)
+#include <pthread.h>
+#include <sched.h>
+#endif
 #if defined(__x86_64__) || defined(__i386__)
 #include <immintrin.h>
 #endif
@@ -20,6 +24,19 @@ void cpu_relax() noexcept {
   _mm_pause();
 #else
   std::this_thread::yield();
+#endif
+}
+
+// Asks for SCHED_FIFO at @p priority for the calling thread; false when refused or
+// unsupported (the thread then keeps ordinary scheduling). priority 0 asks for nothing.
+bool request_realtime(int priority) noexcept {
+  if (priority <= 0) return false;
+#if defined(__linux__)
+  sched_param param{};
+  param.sched_priority = priority;
+  return pthread_setschedparam(pthread_self(), SCHED_FIFO, &param) == 0;
+#else
+  return false;
 #endif
 }
 
@@ -54,6 +71,9 @@ Simulator::Simulator(TetHierarchy& hierarchy, HapticDevice& device, const Simula
   }
   if (!(options.haptic_spin_s >= 0.0) || !(options.haptic_spin_s < options.haptic_period_s)) {
     throw InvalidInput("simulator: haptic spin time must be at least 0 and shorter than the haptic period");
+  }
+  for (const int priority : {options.haptic_realtime_priority, options.collision_realtime_priority}) {
+    if (priority < 0 || priority > 99) throw InvalidInput("simulator: real-time priority must be in [0, 99] (0 = ordinary)");
   }
   m_render_lists = m_surface.v_lists();
   m_render_chunks.resize(hierarchy.root_count());
@@ -143,6 +163,7 @@ void Simulator::haptic_loop() {
   using clock = std::chrono::steady_clock;
   const auto period = std::chrono::nanoseconds(static_cast<std::int64_t>(m_options.haptic_period_s * 1e9));
   const auto spin = std::chrono::nanoseconds(static_cast<std::int64_t>(m_options.haptic_spin_s * 1e9));
+  m_stats.haptic_realtime = request_realtime(m_options.haptic_realtime_priority);
   auto next = clock::now();
   double prev_start = -1.0;
   std::uint64_t seq = 0;
@@ -211,6 +232,7 @@ void Simulator::collision_loop() {
   const double r = m_tool.burr_radius();
   const double substep = m_options.max_substep_mm > 0.0 ? m_options.max_substep_mm : 0.25 * r;
   const std::size_t budget = m_options.erosion.max_node_visits;
+  m_stats.collision_realtime = request_realtime(m_options.collision_realtime_priority);
   while (!m_stop.load(std::memory_order_relaxed)) {
     const bool fresh = m_pose_buffer.has_new();
     if (!fresh && !m_eroder.has_pending() && !m_surface.has_pending()) {

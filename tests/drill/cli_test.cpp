@@ -45,6 +45,7 @@ TEST(DrillCli, TetmeshThenDrillWritesConsistentOutputs) {
   EXPECT_GT(removed, 4.0 / 3.0 * kPi * 1.5 * 1.5 * 1.5 * 0.5);  // at least the plunge's lower half-ball
   EXPECT_LE(rep["bytes_per_node"].get<double>(), 4.0);
   EXPECT_GT(rep["haptic_ticks"].get<int>(), 0);
+  EXPECT_TRUE(rep["haptic_realtime"].is_boolean());
   // The drilled mesh holds exactly the remaining volume, with depth and density fields.
   const auto out = io::read_tet_mesh(dir / "out.vtu");
   double v = 0.0;
@@ -156,6 +157,17 @@ TEST(DrillCli, BadInputIsExitTwoWithAMessage) {
   EXPECT_FALSE(std::filesystem::exists(dir / "o.vtu"));
   r = test::run_tool("drill " + (dir / "c.vtu").string() + " --tool sphere:radius=-1 --path x.csv -o " + (dir / "o.vtu").string());
   EXPECT_EQ(r.exit_code, 2);
+  {
+    std::ofstream f(dir / "path.csv");
+    f << "t,x,y,z\n0,0.5,0.5,2\n0.1,0.5,0.5,1.5\n";
+  }
+  for (const char* priority : {"-1", "100"}) {
+    r = test::run_tool("drill " + (dir / "c.vtu").string() + " --tool sphere:radius=0.3 --path " + (dir / "path.csv").string() +
+                       " -o " + (dir / "o.vtu").string() + " --haptic-priority " + priority);
+    EXPECT_EQ(r.exit_code, 2) << priority;
+    EXPECT_NE(r.err.find("--haptic-priority"), std::string::npos) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(dir / "o.vtu"));
+  }
 }
 
 }  // namespace

@@ -2,6 +2,8 @@
 // The threaded session, lock-free hand-offs and the UDP bridge (label: threads).
 #include <arpa/inet.h>
 #include <netinet/in.h>
+#include <pthread.h>
+#include <sched.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -124,6 +126,68 @@ TEST(Simulator, HybridWaitMarginMustBeShorterThanThePeriod) {
     sim.run(10.0);
     EXPECT_GT(sim.stats().haptic_ticks, 50U) << "spin " << spin;
     EXPECT_GT(sim.stats().removed_volume_mm3, 1.0) << "spin " << spin;
+  }
+}
+
+// Whether this process may run a thread under SCHED_FIFO: asked for on a scratch thread.
+bool process_may_use_realtime() {
+  bool granted = false;
+  std::thread probe([&granted] {
+    sched_param p{};
+    p.sched_priority = 10;
+    granted = pthread_setschedparam(pthread_self(), SCHED_FIFO, &p) == 0;
+  });
+  probe.join();
+  return granted;
+}
+
+// A scripted device that records the scheduling policy of the thread calling it.
+class PolicyRecordingDevice final : public HapticDevice {
+ public:
+  explicit PolicyRecordingDevice(ScriptedTrajectory path) : m_path(std::move(path)) {}
+  ToolPose read_pose(double t_s) noexcept override {
+    m_policy.store(sched_getscheduler(0), std::memory_order_relaxed);
+    return m_path.read_pose(t_s);
+  }
+  void write_force(const Vec3& f, double t_s) noexcept override { m_path.write_force(f, t_s); }
+  [[nodiscard]] bool finished(double t_s) const noexcept override { return m_path.finished(t_s); }
+  [[nodiscard]] int policy() const noexcept { return m_policy.load(std::memory_order_relaxed); }
+
+ private:
+  ScriptedTrajectory m_path;
+  std::atomic<int> m_policy{-1};
+};
+
+TEST(Simulator, RealtimePriorityOutsideZeroTo99IsRejected) {
+  TetHierarchy h(make_block({12, 12, 12}, 3.0));
+  auto device = plunge(0.4);
+  for (const int priority : {-1, 100}) {
+    SimulatorOptions o;
+    o.haptic_realtime_priority = priority;
+    EXPECT_THROW((void)Simulator(h, device, o), InvalidInput) << "haptic " << priority;
+    o = {};
+    o.collision_realtime_priority = priority;
+    EXPECT_THROW((void)Simulator(h, device, o), InvalidInput) << "collision " << priority;
+  }
+}
+
+TEST(Simulator, HapticThreadRunsUnderTheSchedulingItReports) {
+  const bool may = process_may_use_realtime();
+  for (const int priority : {0, 80}) {
+    TetHierarchy g(make_block({12, 12, 12}, 3.0));
+    PolicyRecordingDevice device(plunge(0.4));
+    SimulatorOptions o;
+    o.tool.burr_radius_mm = 2.0;
+    o.erosion = {.force_threshold_n = 0.05, .removal_rate_mm3_per_s = 0.0, .max_depth = 3};
+    o.haptic_realtime_priority = priority;
+    Simulator sim(g, device, o);
+    sim.run(10.0);
+    const bool realtime = priority > 0 && may;
+    EXPECT_EQ(sim.stats().haptic_realtime, realtime) << "priority " << priority;
+    EXPECT_FALSE(sim.stats().collision_realtime);
+    // The policy seen from inside the device's read_pose, i.e. on the haptic thread.
+    EXPECT_EQ(device.policy(), realtime ? SCHED_FIFO : SCHED_OTHER) << "priority " << priority;
+    EXPECT_GT(sim.stats().removed_volume_mm3, 1.0) << "priority " << priority;
   }
 }
 

@@ -34,6 +34,16 @@ struct SimulatorOptions {
   /// thread competes with the collision thread and is preempted more; see
   /// bench/results/drill.md); it is meant for a core of its own.
   double haptic_spin_s = 0.0;
+  /// Real-time priority requested for the haptic thread: SCHED_FIFO at this priority
+  /// (1–99), so that ordinary processes (a compiler, a browser) cannot delay its wake-ups;
+  /// 0 = ordinary scheduling. Default 80. A refused request (no CAP_SYS_NICE and
+  /// RLIMIT_RTPRIO below it, or not Linux) leaves the thread ordinary, and
+  /// SessionStats::haptic_realtime says so. The kernel's real-time throttling
+  /// (sched_rt_runtime_us) still bounds what a real-time thread can take from the rest.
+  int haptic_realtime_priority = 80;
+  /// The same for the collision/erosion thread; 0 (default) = ordinary. Give it a lower
+  /// priority than the haptic thread: while a backlog lasts it runs without sleeping.
+  int collision_realtime_priority = 0;
   double max_substep_mm = 0.0;         ///< erosion sub-steps along the motion; 0 = burr radius / 4
   std::size_t max_haptic_ticks = 1U << 20;  ///< timing samples kept (preallocated)
   double render_period_s = 1.0 / 60.0;  ///< render consumer polling period (s)
@@ -63,6 +73,8 @@ struct SessionStats {
   std::vector<double> force_compute_time_s; ///< read pose → force written, per tick
   std::size_t haptic_ticks = 0;
   std::size_t missed_deadlines = 0;         ///< ticks finishing after their period ended
+  bool haptic_realtime = false;              ///< the haptic thread got its real-time priority
+  bool collision_realtime = false;           ///< the collision thread got its real-time priority
   std::size_t collision_updates = 0;
   std::size_t render_snapshots = 0;          ///< snapshots consumed by the render thread
   std::size_t surface_snapshots = 0;         ///< SurfaceSnapshotFn calls
@@ -88,7 +100,7 @@ struct SessionStats {
 class Simulator {
  public:
   /// @throws ido::InvalidInput for a non-positive haptic period, a spin time outside
-  /// [0, period), or invalid tool / erosion options.
+  /// [0, period), a real-time priority outside [0, 99], or invalid tool / erosion options.
   Simulator(TetHierarchy& hierarchy, HapticDevice& device, const SimulatorOptions& options = {});
   ~Simulator();
   Simulator(const Simulator&) = delete;
