@@ -1,11 +1,20 @@
 // SPDX-License-Identifier: Apache-2.0
-// Self-intersection detection on a ~82k-triangle noisy sphere with local folds: ido against
-// CGAL's Polygon Mesh Processing (does_self_intersect / self_intersections) in one binary.
+// Self-intersection detection on 102 400-triangle tori: ido against CGAL's Polygon Mesh
+// Processing (self_intersections / does_self_intersect) in one binary, on the same meshes.
 //
 //   build/bench/bench/geometry/bench_self_intersection --benchmark_repetitions=5 \
 //       --benchmark_report_aggregates_only=true
+//
+// Arguments: mesh (0 clean, 1 folded, 2 folded with vertices and triangles shuffled) and
+// threaded (0: one thread, ido threaded = false and CGAL Sequential_tag; 1: oneTBB's default
+// arena for both, ido threaded = true and CGAL Parallel_tag). Single-threaded rows report the
+// calling thread's CPU time; threaded rows the whole process's CPU time (all threads).
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numeric>
 #include <random>
 
 #include "ido/geometry/primitives.h"
@@ -22,32 +31,60 @@ namespace {
 using namespace ido;
 using namespace ido::geometry;
 
-/// Icosphere (subdivision 6: 81 920 triangles, radius 10 mm, edges about 0.19 mm) with
-/// 0.02 mm of uniform noise on every vertex and 300 vertices dragged 0.4 mm sideways (about
-/// two edge lengths, tangent to the sphere), which folds their fans through the
-/// neighbouring triangles.
-const TriangleMesh& test_mesh() {
-  static const TriangleMesh mesh = [] {
-    TriangleMesh m = icosphere(Vec3::Zero(), 10.0, 6);
-    std::mt19937_64 rng(2024);
-    std::uniform_real_distribution<double> noise(-0.02, 0.02);
-    for (Vec3& v : m.vertices) v += Vec3(noise(rng), noise(rng), noise(rng));
-    std::uniform_int_distribution<std::size_t> pick(0, m.vertices.size() - 1);
-    std::normal_distribution<double> dir(0.0, 1.0);
-    for (int k = 0; k < 300; ++k) {
-      Vec3& v = m.vertices[pick(rng)];
-      Vec3 t(dir(rng), dir(rng), dir(rng));
-      t -= t.dot(v.normalized()) * v.normalized();
-      v += 0.4 * t.normalized();
-    }
-    return m;
-  }();
-  return mesh;
+constexpr double kMajorMm = 10.0;
+
+/// Torus (major radius 10 mm, tube 4 mm, 320 × 160 segments: 102 400 triangles, edges
+/// 0.12–0.27 mm) with 0.01 mm of uniform noise on every vertex: no self-intersection.
+TriangleMesh clean_torus() {
+  TriangleMesh m = torus_surface(Vec3::Zero(), kMajorMm, 4.0, 320, 160);
+  std::mt19937_64 rng(2024);
+  std::uniform_real_distribution<double> noise(-0.01, 0.01);
+  for (Vec3& v : m.vertices) v += Vec3(noise(rng), noise(rng), noise(rng));
+  return m;
+}
+
+/// The clean torus with 400 vertices dragged 0.4 mm along the surface (a random tangent
+/// direction, 1.5–3 edge lengths), which folds their fans through neighbouring triangles.
+TriangleMesh folded_torus() {
+  TriangleMesh m = clean_torus();
+  std::mt19937_64 rng(7);
+  std::uniform_int_distribution<std::size_t> pick(0, m.vertices.size() - 1);
+  std::normal_distribution<double> dir(0.0, 1.0);
+  for (int k = 0; k < 400; ++k) {
+    Vec3& v = m.vertices[pick(rng)];
+    const Vec3 ring = kMajorMm * Vec3(v.x(), v.y(), 0.0).normalized();  // tube centre line
+    const Vec3 normal = (v - ring).normalized();
+    Vec3 t(dir(rng), dir(rng), dir(rng));
+    t -= t.dot(normal) * normal;
+    v += 0.4 * t.normalized();
+  }
+  return m;
+}
+
+/// The folded torus with its vertices and triangles in random order (no index locality).
+TriangleMesh shuffled(TriangleMesh m) {
+  std::mt19937_64 rng(11);
+  std::vector<std::int32_t> new_id(m.vertices.size());
+  std::iota(new_id.begin(), new_id.end(), 0);
+  std::shuffle(new_id.begin(), new_id.end(), rng);
+  std::vector<Vec3> vertices(m.vertices.size());
+  for (std::size_t v = 0; v < m.vertices.size(); ++v) vertices[static_cast<std::size_t>(new_id[v])] = m.vertices[v];
+  m.vertices = std::move(vertices);
+  for (Tri& t : m.triangles) {
+    for (auto& i : t) i = new_id[static_cast<std::size_t>(i)];
+  }
+  std::shuffle(m.triangles.begin(), m.triangles.end(), rng);
+  return m;
+}
+
+const TriangleMesh& test_mesh(std::int64_t kind) {
+  static const std::array<TriangleMesh, 3> meshes{clean_torus(), folded_torus(), shuffled(folded_torus())};
+  return meshes[static_cast<std::size_t>(kind)];
 }
 
 void BM_ido_self_intersections(benchmark::State& state) {
-  const TriangleMesh& m = test_mesh();
-  const bool threaded = state.range(0) != 0;
+  const TriangleMesh& m = test_mesh(state.range(0));
+  const bool threaded = state.range(1) != 0;
   std::size_t pairs = 0;
   for (auto _ : state) {
     const auto r = self_intersections(m, {.threaded = threaded});
@@ -57,39 +94,45 @@ void BM_ido_self_intersections(benchmark::State& state) {
   state.counters["pairs"] = static_cast<double>(pairs);
   state.counters["triangles"] = static_cast<double>(m.triangles.size());
 }
-BENCHMARK(BM_ido_self_intersections)->Arg(0)->Arg(1)->ArgName("threaded")->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_ido_has_self_intersections(benchmark::State& state) {
-  const TriangleMesh& m = test_mesh();
-  const bool threaded = state.range(0) != 0;
-  for (auto _ : state) benchmark::DoNotOptimize(has_self_intersections(m, {.threaded = threaded}));
+  const TriangleMesh& m = test_mesh(state.range(0));
+  const bool threaded = state.range(1) != 0;
+  bool any = false;
+  for (auto _ : state) {
+    any = has_self_intersections(m, {.threaded = threaded});
+    benchmark::DoNotOptimize(any);
+  }
+  state.counters["intersects"] = any ? 1.0 : 0.0;
 }
-BENCHMARK(BM_ido_has_self_intersections)->Arg(0)->Arg(1)->ArgName("threaded")->Unit(benchmark::kMillisecond)->UseRealTime();
 
 #ifdef IDO_BENCH_WITH_CGAL
 using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 using SurfaceMesh = CGAL::Surface_mesh<Kernel::Point_3>;
 namespace PMP = CGAL::Polygon_mesh_processing;
 
-const SurfaceMesh& cgal_mesh() {
-  static const SurfaceMesh mesh = [] {
-    const TriangleMesh& m = test_mesh();
-    SurfaceMesh s;
-    std::vector<SurfaceMesh::Vertex_index> vid;
-    vid.reserve(m.vertices.size());
-    for (const Vec3& v : m.vertices) vid.push_back(s.add_vertex(Kernel::Point_3(v.x(), v.y(), v.z())));
-    for (const Tri& t : m.triangles) {
-      s.add_face(vid[static_cast<std::size_t>(t[0])], vid[static_cast<std::size_t>(t[1])],
-                 vid[static_cast<std::size_t>(t[2])]);
-    }
-    return s;
-  }();
-  return mesh;
+SurfaceMesh to_surface_mesh(const TriangleMesh& m) {
+  SurfaceMesh s;
+  std::vector<SurfaceMesh::Vertex_index> vid;
+  vid.reserve(m.vertices.size());
+  for (const Vec3& v : m.vertices) vid.push_back(s.add_vertex(Kernel::Point_3(v.x(), v.y(), v.z())));
+  for (const Tri& t : m.triangles) {
+    s.add_face(vid[static_cast<std::size_t>(t[0])], vid[static_cast<std::size_t>(t[1])],
+               vid[static_cast<std::size_t>(t[2])]);
+  }
+  return s;
+}
+
+/// The same meshes as Surface_mesh, converted once (outside the timing).
+const SurfaceMesh& cgal_mesh(std::int64_t kind) {
+  static const std::array<SurfaceMesh, 3> meshes{to_surface_mesh(test_mesh(0)), to_surface_mesh(test_mesh(1)),
+                                                 to_surface_mesh(test_mesh(2))};
+  return meshes[static_cast<std::size_t>(kind)];
 }
 
 void BM_cgal_self_intersections(benchmark::State& state) {
-  const SurfaceMesh& s = cgal_mesh();
-  const bool parallel = state.range(0) != 0;
+  const SurfaceMesh& s = cgal_mesh(state.range(0));
+  const bool parallel = state.range(1) != 0;
   std::size_t pairs = 0;
   for (auto _ : state) {
     std::vector<std::pair<SurfaceMesh::Face_index, SurfaceMesh::Face_index>> r;
@@ -104,22 +147,49 @@ void BM_cgal_self_intersections(benchmark::State& state) {
   state.counters["pairs"] = static_cast<double>(pairs);
   state.counters["triangles"] = static_cast<double>(num_faces(s));
 }
-BENCHMARK(BM_cgal_self_intersections)->Arg(0)->Arg(1)->ArgName("threaded")->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_cgal_does_self_intersect(benchmark::State& state) {
-  const SurfaceMesh& s = cgal_mesh();
-  const bool parallel = state.range(0) != 0;
+  const SurfaceMesh& s = cgal_mesh(state.range(0));
+  const bool parallel = state.range(1) != 0;
+  bool any = false;
   for (auto _ : state) {
-    if (parallel) {
-      benchmark::DoNotOptimize(PMP::does_self_intersect<CGAL::Parallel_tag>(faces(s), s));
-    } else {
-      benchmark::DoNotOptimize(PMP::does_self_intersect<CGAL::Sequential_tag>(faces(s), s));
+    any = parallel ? PMP::does_self_intersect<CGAL::Parallel_tag>(faces(s), s)
+                   : PMP::does_self_intersect<CGAL::Sequential_tag>(faces(s), s);
+    benchmark::DoNotOptimize(any);
+  }
+  state.counters["intersects"] = any ? 1.0 : 0.0;
+}
+#endif
+
+/// Registers ido and CGAL next to each other for every (mesh, threaded) pair, so that one run
+/// interleaves them; threaded rows measure the CPU time of the whole process.
+void register_all() {
+  for (int mesh = 0; mesh < 3; ++mesh) {
+    for (int threaded = 0; threaded < 2; ++threaded) {
+      std::vector<benchmark::internal::Benchmark*> runs;
+      runs.push_back(benchmark::RegisterBenchmark("ido_self_intersections", BM_ido_self_intersections));
+#ifdef IDO_BENCH_WITH_CGAL
+      runs.push_back(benchmark::RegisterBenchmark("cgal_self_intersections", BM_cgal_self_intersections));
+#endif
+      runs.push_back(benchmark::RegisterBenchmark("ido_has_self_intersections", BM_ido_has_self_intersections));
+#ifdef IDO_BENCH_WITH_CGAL
+      runs.push_back(benchmark::RegisterBenchmark("cgal_does_self_intersect", BM_cgal_does_self_intersect));
+#endif
+      for (auto* b : runs) {
+        b->ArgNames({"mesh", "threaded"})->Args({mesh, threaded})->Unit(benchmark::kMillisecond)->UseRealTime();
+        if (threaded != 0) b->MeasureProcessCPUTime();
+      }
     }
   }
 }
-BENCHMARK(BM_cgal_does_self_intersect)->Arg(0)->Arg(1)->ArgName("threaded")->Unit(benchmark::kMillisecond)->UseRealTime();
-#endif
 
 }  // namespace
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv) {
+  register_all();
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

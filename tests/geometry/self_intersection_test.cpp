@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <random>
 
 #include "ido/geometry/primitives.h"
@@ -24,12 +26,53 @@ Pairs brute_force(const TriangleMesh& m) {
   return out;
 }
 
-void expect_matches_brute_force(const TriangleMesh& m, bool expect_some) {
+/// Both searches and both early-exit queries, one and several threads, against the exact
+/// brute force; returns the reference pairs.
+Pairs expect_agrees_with_brute_force(const TriangleMesh& m) {
   const Pairs ref = brute_force(m);
   EXPECT_EQ(self_intersections(m, {.threaded = false}), ref);
   EXPECT_EQ(self_intersections(m, {.threaded = true}), ref);
-  EXPECT_EQ(has_self_intersections(m), !ref.empty());
-  EXPECT_EQ(!ref.empty(), expect_some);
+  EXPECT_EQ(has_self_intersections(m, {.threaded = false}), !ref.empty());
+  EXPECT_EQ(has_self_intersections(m, {.threaded = true}), !ref.empty());
+  return ref;
+}
+
+void expect_matches_brute_force(const TriangleMesh& m, bool expect_some) {
+  EXPECT_EQ(!expect_agrees_with_brute_force(m).empty(), expect_some);
+}
+
+/// @p m with its vertices and triangles in random order (same surface, no index locality).
+TriangleMesh shuffled(TriangleMesh m, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::vector<std::int32_t> new_id(m.vertices.size());
+  for (std::size_t v = 0; v < new_id.size(); ++v) new_id[v] = static_cast<std::int32_t>(v);
+  std::shuffle(new_id.begin(), new_id.end(), rng);
+  std::vector<Vec3> vertices(m.vertices.size());
+  for (std::size_t v = 0; v < m.vertices.size(); ++v) vertices[static_cast<std::size_t>(new_id[v])] = m.vertices[v];
+  m.vertices = std::move(vertices);
+  for (Tri& t : m.triangles) {
+    for (auto& i : t) i = new_id[static_cast<std::size_t>(i)];
+  }
+  std::shuffle(m.triangles.begin(), m.triangles.end(), rng);
+  return m;
+}
+
+/// A (n + 1)² lattice grid in the plane z = 0 triangulated into 2n² triangles, with every
+/// vertex's z set by @p height(i, j).
+template <class Height>
+TriangleMesh lattice_grid(int n, const Height& height) {
+  TriangleMesh m;
+  for (int j = 0; j <= n; ++j) {
+    for (int i = 0; i <= n; ++i) m.vertices.emplace_back(i, j, height(i, j));
+  }
+  auto id = [&](int i, int j) { return static_cast<std::int32_t>(j * (n + 1) + i); };
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      m.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      m.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  }
+  return m;
 }
 
 TEST(SelfIntersection, CleanSurfacesHaveNone) {
@@ -84,6 +127,77 @@ TEST(SelfIntersection, AdversarialGridMeshMatchesBruteForce) {
     v.y() += h(rng) * 1.5;
   }
   expect_matches_brute_force(m, true);
+}
+
+TEST(SelfIntersection, ShuffledIndicesMatchBruteForce) {
+  // No index locality: the search sorts a copy spatially (and the early-exit query probes a
+  // prefix in input order first); pairs must come back in the caller's triangle ids.
+  for (unsigned seed = 1; seed <= 2; ++seed) {
+    const TriangleMesh folded = shuffled(test::jittered(icosphere(Vec3::Zero(), 1.0, 3), 0.12, seed), seed);
+    expect_matches_brute_force(folded, true);
+  }
+  expect_matches_brute_force(shuffled(torus_surface(Vec3::Zero(), 3, 1, 48, 24), 5), false);
+  // One fold in a large clean mesh: the input-order probe misses it, the sorted pass finds it.
+  TriangleMesh one_fold = torus_surface(Vec3::Zero(), 3, 1, 48, 24);
+  Vec3& dragged = one_fold.vertices[1000];
+  // Pushed through the tube and out of its opposite wall: a spike through the far side.
+  const Vec3 centre_line = 3.0 * Vec3(dragged.x(), dragged.y(), 0.0).normalized();
+  dragged -= 2.3 * (dragged - centre_line).normalized();
+  const TriangleMesh one_fold_shuffled = shuffled(one_fold, 9);
+  EXPECT_FALSE(expect_agrees_with_brute_force(one_fold_shuffled).empty());
+}
+
+TEST(SelfIntersection, NearCoplanarNeighboursAtRoundoffLevel) {
+  // Heights a few units in the last place of coordinates near 1000 mm: neighbours are
+  // coplanar or off each other's planes by one rounding step, where the floating-point plane
+  // filter cannot decide and the exact predicates must; folds and vertices pulled onto
+  // neighbours' edges add touching and overlapping coplanar pairs.
+  std::mt19937 rng(21);
+  std::uniform_int_distribution<int> ulps(-2, 2);
+  const double ulp = std::nextafter(1000.0, 2000.0) - 1000.0;
+  for (int variant = 0; variant < 3; ++variant) {
+    TriangleMesh m = lattice_grid(12, [&](int, int) { return ulps(rng) * ulp; });
+    for (Vec3& v : m.vertices) v = Vec3(1000.0, 1000.0, 1000.0) + (variant == 2 ? 1e-9 : 1.0) * v;
+    std::uniform_int_distribution<int> pick(0, static_cast<int>(m.vertices.size()) - 1);
+    std::uniform_int_distribution<int> step(-1, 1);
+    for (int k = 0; k < 6 * variant; ++k) {
+      Vec3& v = m.vertices[static_cast<std::size_t>(pick(rng))];
+      const double scale = variant == 2 ? 1e-9 : 1.0;
+      v.x() += step(rng) * 1.5 * scale;
+      v.y() += step(rng) * 0.5 * scale;
+    }
+    const Pairs ref = expect_agrees_with_brute_force(m);
+    EXPECT_EQ(ref.empty(), variant == 0);  // the unfolded grid is a height field
+    EXPECT_EQ(expect_agrees_with_brute_force(shuffled(m, 3 + static_cast<unsigned>(variant))).size(), ref.size());
+  }
+  // Exactly flat: no intersection however the plane signs round.
+  expect_matches_brute_force(lattice_grid(12, [](int, int) { return 1000.0; }), false);
+}
+
+TEST(SelfIntersection, VertexNeighboursCrossingOrTangent) {
+  // Two triangles sharing vertex 0 whose opposite edges cross each other's planes: the
+  // filter decides the crossing from certified signs, or hands over near the boundary
+  // (the edge passing through the other triangle's edge or corner).
+  // They meet beyond the shared vertex iff |y| <= 1/2 (the second triangle's cut through
+  // the first's plane is the segment from the origin to (1, y, 0)).
+  for (double y : {0.75, 0.5 + 0x1p-40, 0.5, 0.5 - 0x1p-40, 0.25, 1e-17, 0.0, -0.5, -0.5 - 0x1p-40}) {
+    TriangleMesh m;
+    m.vertices = {{0, 0, 0}, {2, -1, 0}, {2, 1, 0}, {1, y, -1}, {1, y, 1}};
+    m.triangles = {{0, 1, 2}, {0, 3, 4}};
+    const Pairs ref = brute_force(m);
+    EXPECT_EQ(!ref.empty(), std::abs(y) <= 0.5) << "y = " << y;
+    EXPECT_EQ(self_intersections(m, {.threaded = false}), ref) << "y = " << y;
+    EXPECT_EQ(has_self_intersections(m, {.threaded = false}), !ref.empty()) << "y = " << y;
+  }
+  // The second triangle's opposite edge passes exactly through the first's corner (2, 1, 0).
+  TriangleMesh corner;
+  corner.vertices = {{0, 0, 0}, {2, -1, 0}, {2, 1, 0}, {2, 1, -1}, {2, 1, 1}};
+  corner.triangles = {{0, 1, 2}, {0, 3, 4}};
+  EXPECT_EQ(self_intersections(corner), (Pairs{{0, 1}}));
+  // Crossing beyond the first triangle: they meet only at the shared vertex.
+  corner.vertices[3] = {3, 2, -1};
+  corner.vertices[4] = {3, 2, 1};
+  EXPECT_TRUE(self_intersections(corner).empty());
 }
 
 TEST(SelfIntersection, FoldedCoplanarNeighboursAndDuplicates) {
