@@ -11,17 +11,11 @@
 namespace ido::drill {
 namespace {
 
-// True when the sphere (c, r) cannot touch the tetrahedron x: outside the bounding sphere
-// of the vertices or entirely beyond one face plane. The plane test compares squares
-// (n·(c − a))² > r² |n|² on the outer side, so no square root or division per face.
-bool sphere_misses_tet(const std::array<Vec3, 4>& x, const Vec3& c, double r) {
-  const Vec3 centroid = 0.25 * (x[0] + x[1] + x[2] + x[3]);
-  double rad2 = 0.0;
-  for (const auto& v : x) rad2 = std::max(rad2, (v - centroid).squaredNorm());
-  const double reach = r + std::sqrt(rad2);
-  const double d2 = (c - centroid).squaredNorm();
-  if (d2 > reach * reach) return true;
-  const double r2 = r * r;
+// The face-plane part of sphere_misses_tet, for a tetrahedron whose bounding sphere the
+// sphere reaches and whose centroid lies at squared distance d2 from c: true when c lies
+// beyond one face plane by more than r. Compares squares (n·(c − a))² > r² |n|² on the
+// outer side, so no square root or division per face.
+bool beyond_a_face(const std::array<Vec3, 4>& x, const Vec3& c, double r2, double d2) {
   if (d2 <= r2) return false;  // the centroid is inside the sphere
   static constexpr int kFace[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
   for (int f = 0; f < 4; ++f) {
@@ -36,24 +30,76 @@ bool sphere_misses_tet(const std::array<Vec3, 4>& x, const Vec3& c, double r) {
   return false;
 }
 
-// True when erosion would remove anything from a full node of geometry x at depth `depth`
-// (finest level `finest`) without touching the tree: the same decisions as
-// Eroder::enter on a full leaf, evaluated on derived geometry only, so a partly covered
-// leaf is refined only when a descendant will actually go (no refine-then-undo). Adds the
-// nodes it tests to `visits`.
-bool would_remove(const std::array<Vec3, 4>& x, int depth, int finest, const Vec3& c, double r, std::size_t& visits) {
-  ++visits;
-  if (sphere_misses_tet(x, c, r)) return false;
+// The per-node tests of one sphere (c, r) on tetrahedron x, without the face planes: whether
+// the sphere misses the bounding sphere of the vertices about the centroid (`beyond`), the
+// squared distance from c to the centroid (`d2`) and which vertices lie in the sphere
+// (`inside`, bit k for vertex k).
+void node_tests(const std::array<Vec3, 4>& x, const Vec3& c, double r, bool& beyond, double& d2,
+                std::uint8_t& inside) {
+  const Vec3 centroid = 0.25 * (x[0] + x[1] + x[2] + x[3]);
+  double rad2 = 0.0;
+  for (const auto& v : x) rad2 = std::max(rad2, (v - centroid).squaredNorm());
+  const double reach = r + std::sqrt(rad2);
+  d2 = (c - centroid).squaredNorm();
+  beyond = d2 > reach * reach;
   const double r2 = r * r;
-  bool all_inside = true;
-  for (const auto& v : x) all_inside = all_inside && (v - c).squaredNorm() <= r2;
-  if (all_inside) return true;
-  if (depth >= finest) return (0.25 * (x[0] + x[1] + x[2] + x[3]) - c).squaredNorm() <= r2;
+  inside = 0;
+  for (std::size_t k = 0; k < 4; ++k)
+    if ((x[k] - c).squaredNorm() <= r2) inside = static_cast<std::uint8_t>(inside | (1U << k));
+}
+
+// True when the sphere cannot touch the tetrahedron x, from its node_tests(): outside the
+// vertices' bounding sphere, or (no vertex inside the sphere) beyond one face plane. A vertex
+// inside the sphere lies on the inner side of every face plane, so the centre cannot be
+// farther than r beyond any of them: the face planes are tested only without one.
+bool sphere_misses(const std::array<Vec3, 4>& x, const Vec3& c, double r2, bool beyond, double d2,
+                   std::uint8_t inside) {
+  return beyond || (inside == 0 && beyond_a_face(x, c, r2, d2));
+}
+
+// The 8 children of a tetrahedron p and their node_tests() for the sphere (c, r), skipping
+// the slots whose bit is set in @p skip (erased children: left untested).
+void make_children(const std::array<Vec3, 4>& p, const Vec3& c, double r, std::uint8_t skip,
+                   detail::ErosionChildren& k) {
   const TreeTable& t = TreeTable::get();
   for (std::size_t s = 0; s < 8; ++s) {
-    std::array<Vec3, 4> ch;
-    for (std::size_t k = 0; k < 4; ++k) ch[k] = 0.5 * (x[t.vertex[s][k][0]] + x[t.vertex[s][k][1]]);
-    if (would_remove(ch, depth + 1, finest, c, r, visits)) return true;
+    if (((skip >> s) & 1U) != 0) continue;
+    for (std::size_t v = 0; v < 4; ++v) k.x[s][v] = 0.5 * (p[t.vertex[s][v][0]] + p[t.vertex[s][v][1]]);
+    bool beyond = false;
+    node_tests(k.x[s], c, r, beyond, k.d2[s], k.inside[s]);
+    k.beyond[s] = beyond;
+  }
+}
+
+// Bit s set when child s of the internal node of storage word `word` is an erased leaf.
+std::uint8_t erased_children(const TetHierarchy& h, std::uint32_t word) noexcept {
+  unsigned m = 0;
+  for (int s = 0; s < 8; ++s)
+    if (h.child_word(word, s) == TetHierarchy::kErased) m |= 1U << s;
+  return static_cast<std::uint8_t>(m);
+}
+
+// True when erosion would remove anything below a partly covered full node of geometry x at
+// depth `depth` < `finest` (finest level) without touching the tree: the same decisions as
+// Eroder::enter on its children as full leaves, evaluated on derived geometry only, so a
+// partly covered leaf is refined only when a descendant will actually go (no
+// refine-then-undo). Adds the nodes it tests to `visits`.
+// NOLINTNEXTLINE(misc-no-recursion): depth ≤ kMaxDepth
+bool would_remove_below(const std::array<Vec3, 4>& x, int depth, int finest, const Vec3& c, double r,
+                        std::size_t& visits) {
+  detail::ErosionChildren k;
+  make_children(x, c, r, 0, k);
+  const double r2 = r * r;
+  for (std::size_t s = 0; s < 8; ++s) {
+    ++visits;
+    const auto& ch = k.x[s];
+    if (sphere_misses(ch, c, r2, k.beyond[s], k.d2[s], k.inside[s])) continue;
+    if (k.inside[s] == 0xF) return true;  // entirely inside
+    if (depth + 1 >= finest) {
+      if (k.d2[s] <= r2) return true;  // the centroid is inside
+      continue;
+    }
+    if (would_remove_below(ch, depth + 1, finest, c, r, visits)) return true;
   }
   return false;
 }
@@ -115,23 +161,20 @@ void Eroder::mark(const NodeRef& node, std::uint8_t faces) {
 // its children are to be processed (a frame was pushed), Abort when the volume budget ran out.
 // @p word is the node's storage word, read from its parent's frame (no walk from the root).
 Eroder::Enter Eroder::enter(TetHierarchy& h, const NodeRef& node, std::uint32_t word, const std::array<Vec3, 4>& x,
-                            int finest, const std::array<std::int8_t, 4>& root_face, ErosionStats& stats) {
+                            bool beyond, double d2, std::uint8_t inside, int finest,
+                            const std::array<std::int8_t, 4>& root_face, ErosionStats& stats) {
   ++m_visits;
   const NodeState st = TetHierarchy::state_of_word(word);
   if (st == NodeState::Erased) return Enter::Done;
-  if (sphere_misses_tet(x, m_centre, m_radius)) return Enter::Done;
   const double r2 = m_radius * m_radius;
-  bool all_inside = true;
-  for (const auto& v : x) all_inside = all_inside && (v - m_centre).squaredNorm() <= r2;
+  if (sphere_misses(x, m_centre, r2, beyond, d2, inside)) return Enter::Done;
+  const bool all_inside = inside == 0xF;
   std::uint8_t face_mask = 0;
   for (const auto f : root_face)
     if (f >= 0) face_mask = static_cast<std::uint8_t>(face_mask | (1U << f));
   m_face_mask[node.depth] = face_mask;
   if (all_inside || node.depth >= finest) {
-    if (!all_inside) {
-      const Vec3 centroid = 0.25 * (x[0] + x[1] + x[2] + x[3]);
-      if ((centroid - m_centre).squaredNorm() > r2) return Enter::Done;
-    }
+    if (!all_inside && d2 > r2) return Enter::Done;  // the centroid is outside
     double material = 0.0;
     if (st == NodeState::Full) {
       material = h.node_volume(node);
@@ -170,7 +213,9 @@ Eroder::Enter Eroder::enter(TetHierarchy& h, const NodeRef& node, std::uint32_t 
   if (st == NodeState::Full) {
     // Decide before refining: a partly covered full leaf none of whose descendants would
     // go stays a leaf.
-    if (node.depth >= kMaxDepth || !would_remove(x, node.depth, finest, m_centre, m_radius, m_visits)) return Enter::Done;
+    if (node.depth >= kMaxDepth) return Enter::Done;
+    ++m_visits;  // the dry run's visit of the node itself (its tests are the ones above)
+    if (!would_remove_below(x, node.depth, finest, m_centre, m_radius, m_visits)) return Enter::Done;
     if (!h.refine(node)) return Enter::Done;
     word = node_word(h, node);  // its new children's block
     refined_here = true;
@@ -178,6 +223,7 @@ Eroder::Enter Eroder::enter(TetHierarchy& h, const NodeRef& node, std::uint32_t 
     mark(node, face_mask);
   }
   m_stack.push_back(Frame{node, word, x, root_face, static_cast<std::int8_t>(finest), 0, refined_here, face_mask});
+  make_children(x, m_centre, m_radius, erased_children(h, word), m_children[node.depth]);
   return Enter::Pushed;
 }
 
@@ -281,6 +327,7 @@ ErosionStats Eroder::run(TetHierarchy& hierarchy, std::size_t max_node_visits) {
     for (auto& f : m_stack) {
       f.x = hierarchy.world_vertices(f.node);
       m_face_mask[f.node.depth] = f.face_mask;
+      make_children(f.x, m_centre, m_radius, erased_children(hierarchy, f.word), m_children[f.node.depth]);
     }
   }
   const TreeTable& t = TreeTable::get();
@@ -307,11 +354,7 @@ ErosionStats Eroder::run(TetHierarchy& hierarchy, std::size_t max_node_visits) {
           continue;
         }
         const auto s = static_cast<std::size_t>(f.next_child++);
-        std::array<Vec3, 4> c;
-        for (std::size_t k = 0; k < 4; ++k) {
-          const auto& ev = t.vertex[s][k];
-          c[k] = 0.5 * (f.x[ev[0]] + f.x[ev[1]]);
-        }
+        const detail::ErosionChildren& kids = m_children[f.node.depth];
         std::array<std::int8_t, 4> crf{-1, -1, -1, -1};
         for (std::size_t k = 0; k < 4; ++k) {
           const int pf = t.face_link[s][k].parent_face;
@@ -323,12 +366,18 @@ ErosionStats Eroder::run(TetHierarchy& hierarchy, std::size_t max_node_visits) {
         // 8 children are erased (merge), which leaves the slots after the current one reading
         // kErased, and nothing is refined (no block reused) until the frame is done.
         const std::uint32_t cw = hierarchy.child_word(f.word, static_cast<int>(s));
-        e = enter(hierarchy, child, cw, c, finest, crf, stats);  // may push (invalidates f)
+        // May push (invalidates f; overwrites only the next depth's children, not kids).
+        e = enter(hierarchy, child, cw, kids.x[s], kids.beyond[s], kids.d2[s], kids.inside[s], finest, crf, stats);
       } else if (m_next_candidate < m_candidates.size()) {
         const std::uint32_t r = m_candidates[m_next_candidate++];
         const NodeRef root{r, 0, 0};
-        e = enter(hierarchy, root, hierarchy.root_word(r), hierarchy.world_vertices(root), finest_level(hierarchy, r),
-                  {0, 1, 2, 3}, stats);
+        const std::array<Vec3, 4> x = hierarchy.world_vertices(root);
+        bool beyond = false;
+        double d2 = 0.0;
+        std::uint8_t inside = 0;
+        node_tests(x, m_centre, m_radius, beyond, d2, inside);
+        e = enter(hierarchy, root, hierarchy.root_word(r), x, beyond, d2, inside, finest_level(hierarchy, r), {0, 1, 2, 3},
+                  stats);
       } else {
         break;  // this sphere is done
       }

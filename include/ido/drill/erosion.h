@@ -10,6 +10,17 @@
 
 namespace ido::drill {
 
+namespace detail {
+/// Implementation detail of Eroder: the 8 children of a node for one burr sphere, with the
+/// per-node tests that need no face plane done for all 8 when the node is entered.
+struct ErosionChildren {
+  std::array<std::array<Vec3, 4>, 8> x;  ///< child vertices (mm), TreeTable order
+  std::array<double, 8> d2{};             ///< squared distance (mm²) from the sphere centre to each centroid
+  std::array<bool, 8> beyond{};           ///< the sphere misses the child's vertex bounding sphere
+  std::array<std::uint8_t, 8> inside{};   ///< bit k: vertex k lies in the sphere
+};
+}  // namespace detail
+
 /// How the burr removes material.
 struct ErosionOptions {
   /// Pressing force (N) above which the burr cuts.
@@ -120,8 +131,10 @@ class Eroder {
   };
   enum class Enter { Done, Pushed, Abort };
 
-  Enter enter(TetHierarchy& h, const NodeRef& node, std::uint32_t word, const std::array<Vec3, 4>& x, int finest,
-              const std::array<std::int8_t, 4>& root_face, ErosionStats& stats);
+  // beyond / d2 / inside: the node's tests without face planes (detail::ErosionChildren).
+  Enter enter(TetHierarchy& h, const NodeRef& node, std::uint32_t word, const std::array<Vec3, 4>& x, bool beyond,
+              double d2, std::uint8_t inside, int finest, const std::array<std::int8_t, 4>& root_face,
+              ErosionStats& stats);
   void leave(TetHierarchy& h, const Frame& f, ErosionStats& stats);
   void mark(const NodeRef& node, std::uint8_t faces);
   void start_sphere(const TetHierarchy& h, const Sphere& s);
@@ -148,6 +161,7 @@ class Eroder {
   std::vector<std::uint8_t> m_changed_faces;
   std::vector<std::uint32_t> m_slot;  // root → index in m_changed
   std::array<std::uint8_t, kMaxDepth + 1> m_face_mask{};  // root faces touched per level of the current path
+  std::array<detail::ErosionChildren, kMaxDepth + 1> m_children;  // children of the frame at each depth
 };
 
 }  // namespace ido::drill
