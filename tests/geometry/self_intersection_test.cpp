@@ -147,6 +147,25 @@ TEST(SelfIntersection, ShuffledIndicesMatchBruteForce) {
   EXPECT_FALSE(expect_agrees_with_brute_force(one_fold_shuffled).empty());
 }
 
+TEST(SelfIntersection, UnevenTriangleSizesMatchBruteForce) {
+  // Large triangles across the whole box of a finely meshed sphere (from near one corner to
+  // near the opposite one, through the sphere): registering them in every cell of a grid
+  // sized to the small triangles exceeds the grid's budget, and the BVH takes over.
+  TriangleMesh m = icosphere(Vec3::Zero(), 1.0, 3);
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> u(-6.0, 6.0);
+  std::uniform_real_distribution<double> jitter(-0.5, 0.5);
+  for (int k = 0; k < 12; ++k) {
+    const auto base = static_cast<std::int32_t>(m.vertices.size());
+    m.vertices.emplace_back(-6.0 + jitter(rng), -6.0 + jitter(rng), -6.0 + jitter(rng));
+    m.vertices.emplace_back(6.0 + jitter(rng), 6.0 + jitter(rng), 6.0 + jitter(rng));
+    m.vertices.emplace_back(u(rng), u(rng), u(rng));
+    m.triangles.push_back({base, base + 1, base + 2});
+  }
+  expect_matches_brute_force(m, true);
+  expect_matches_brute_force(shuffled(m, 4), true);
+}
+
 TEST(SelfIntersection, NearCoplanarNeighboursAtRoundoffLevel) {
   // Heights a few units in the last place of coordinates near 1000 mm: neighbours are
   // coplanar or off each other's planes by one rounding step, where the floating-point plane

@@ -11,7 +11,9 @@ namespace ido::geometry {
 
 /// Tunables of the self-intersection search.
 struct SelfIntersectionOptions {
-  bool threaded = true;  ///< run the broad and narrow phases on several threads (oneTBB)
+  /// Run on several threads (oneTBB): one block of triangle indices per worker, then each
+  /// block against the earlier ones.
+  bool threaded = true;
 };
 
 /// Exact test of two triangles of @p mesh (by id): whether they intersect other than
@@ -25,14 +27,20 @@ struct SelfIntersectionOptions {
                                             std::int32_t t2);
 
 /// All pairs (i, j), i < j, of triangles of @p mesh for which mesh_triangles_intersect is
-/// true, sorted. Broad phase: pair traversal of a TriangleBvh over closed triangle boxes;
-/// narrow phase: exact predicates. The result does not depend on threading.
+/// true, sorted. Broad phase: a uniform grid (cells about twice the mean triangle size) whose
+/// cell lists are filled in one incremental pass, each triangle meeting the earlier ones in
+/// the cells of its box (on a spatially sorted copy when consecutive triangles are not
+/// neighbours in space; a TriangleBvh when no sensible grid exists, e.g. very uneven
+/// triangle sizes). Narrow phase: exact predicates behind a floating-point filter that only
+/// answers when its error bound certifies the signs. The result does not depend on
+/// threading. O(T) for surfaces with triangles of similar size.
 /// @throws ido::InvalidInput for an index out of range or a non-finite coordinate.
 [[nodiscard]] std::vector<std::pair<std::int32_t, std::int32_t>> self_intersections(
     const TriangleMesh& mesh, const SelfIntersectionOptions& options = {});
 
-/// True when self_intersections(mesh) would not be empty; the search stops soon after the
-/// first intersecting pair.
+/// True when self_intersections(mesh) would not be empty; the search stops at the first
+/// intersecting pair it meets, having boxed only the triangles before it (single-threaded)
+/// or within each thread's block of triangles.
 [[nodiscard]] bool has_self_intersections(const TriangleMesh& mesh,
                                           const SelfIntersectionOptions& options = {});
 
