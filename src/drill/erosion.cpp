@@ -57,17 +57,65 @@ bool sphere_misses(const std::array<Vec3, 4>& x, const Vec3& c, double r2, bool 
   return beyond || (inside == 0 && beyond_a_face(x, c, r2, d2));
 }
 
-// The 8 children of a tetrahedron p and their node_tests() for the sphere (c, r), skipping
-// the slots whose bit is set in @p skip (erased children: left untested).
+// The 10 points the children of a tetrahedron are made of, the vertices and edge midpoints
+// (point pair_code(a, b) = 0.5 (x_a + x_b), so x_a itself for a = b), and for each child
+// vertex the point it is. Tabulated once.
+struct ChildPoints {
+  std::array<std::array<std::uint8_t, 2>, 10> ends{};   // the point's parent vertices
+  std::array<std::array<std::uint8_t, 4>, 8> point{};   // child slot, vertex → point
+  ChildPoints() {
+    const TreeTable& t = TreeTable::get();
+    std::array<int, 16> index{};
+    index.fill(-1);
+    int n = 0;
+    for (std::size_t s = 0; s < 8; ++s)
+      for (std::size_t v = 0; v < 4; ++v) {
+        const int a = t.vertex[s][v][0], b = t.vertex[s][v][1];
+        const int code = a < b ? a * 4 + b : b * 4 + a;
+        if (index[static_cast<std::size_t>(code)] < 0) {
+          ends[static_cast<std::size_t>(n)] = {static_cast<std::uint8_t>(a), static_cast<std::uint8_t>(b)};
+          index[static_cast<std::size_t>(code)] = n++;
+        }
+        point[s][v] = static_cast<std::uint8_t>(index[static_cast<std::size_t>(code)]);
+      }
+  }
+};
+
+const ChildPoints& child_points() {
+  static const ChildPoints kPoints;
+  return kPoints;
+}
+
+// The 8 children of a tetrahedron p and their node_tests() for the sphere (c, r), with the
+// same arithmetic in the same order per child, but each of the 10 distinct child vertices
+// (and its distance to c) computed once. Slots whose bit is set in @p skip (erased children)
+// are left untested.
 void make_children(const std::array<Vec3, 4>& p, const Vec3& c, double r, std::uint8_t skip,
                    detail::ErosionChildren& k) {
-  const TreeTable& t = TreeTable::get();
+  const ChildPoints& cp = child_points();
+  const double r2 = r * r;
+  std::array<Vec3, 10> q;
+  unsigned in = 0;  // bit i: point i lies in the sphere
+  for (std::size_t i = 0; i < 10; ++i) {
+    q[i] = 0.5 * (p[cp.ends[i][0]] + p[cp.ends[i][1]]);
+    if ((q[i] - c).squaredNorm() <= r2) in |= 1U << i;
+  }
   for (std::size_t s = 0; s < 8; ++s) {
     if (((skip >> s) & 1U) != 0) continue;
-    for (std::size_t v = 0; v < 4; ++v) k.x[s][v] = 0.5 * (p[t.vertex[s][v][0]] + p[t.vertex[s][v][1]]);
-    bool beyond = false;
-    node_tests(k.x[s], c, r, beyond, k.d2[s], k.inside[s]);
-    k.beyond[s] = beyond;
+    auto& x = k.x[s];
+    std::uint8_t inside = 0;
+    for (std::size_t v = 0; v < 4; ++v) {
+      const std::size_t i = cp.point[s][v];
+      x[v] = q[i];
+      inside = static_cast<std::uint8_t>(inside | (((in >> i) & 1U) << v));
+    }
+    const Vec3 centroid = 0.25 * (x[0] + x[1] + x[2] + x[3]);
+    double rad2 = 0.0;
+    for (const auto& v : x) rad2 = std::max(rad2, (v - centroid).squaredNorm());
+    const double reach = r + std::sqrt(rad2);
+    k.d2[s] = (c - centroid).squaredNorm();
+    k.beyond[s] = k.d2[s] > reach * reach;
+    k.inside[s] = inside;
   }
 }
 
