@@ -202,38 +202,64 @@ Across root_across(const TetHierarchy& h, std::uint32_t r, int f) {
   return a;
 }
 
+// What the v_list walk keeps of what lies across a face (Across without the node's root and
+// path, which the walk never reads): 8 bytes, so a node's four are copied cheaply.
+struct WalkAcross {
+  std::uint32_t word = TetHierarchy::kErased;  ///< storage word of the node across (boundary: erased)
+  std::uint8_t depth = 0;                      ///< its depth
+  std::int8_t face = -1;                       ///< its face index for the shared face
+  bool boundary = false;
+  std::array<std::int8_t, 4> vmap{-1, -1, -1, -1};  ///< as Across::vmap
+};
+
+WalkAcross walk_across(const Across& a) {
+  WalkAcross w;
+  w.word = a.word;
+  w.depth = a.node.depth;
+  w.face = static_cast<std::int8_t>(a.face);
+  w.boundary = a.boundary;
+  for (std::size_t k = 0; k < 4; ++k) w.vmap[k] = static_cast<std::int8_t>(a.vmap[k]);
+  return w;
+}
+
 // The tables the v_list walk reads for every node, fetched once per walk (each accessor
 // is a function-local static).
 struct WalkTables {
   const TreeTable& tree = TreeTable::get();
-  const std::array<std::array<std::array<int, 4>, 4>, 8>& sibling = sibling_map();
   const ChildFaceTable& child_face = child_face_table();
+  std::array<std::array<std::array<std::int8_t, 4>, 4>, 8> sibling{};  // sibling_map() in bytes
+  WalkTables() {
+    const auto& m = sibling_map();
+    for (std::size_t c = 0; c < 8; ++c)
+      for (std::size_t g = 0; g < 4; ++g)
+        for (std::size_t k = 0; k < 4; ++k) sibling[c][g][k] = static_cast<std::int8_t>(m[c][g][k]);
+  }
 };
 
-// What lies across face f of child slot s of the internal node p (storage word pword),
-// given what lies across each face of p (`pacr`); written into @p out field by field (a
-// returned temporary, built piecewise on the stack and copied, cost a store-forwarding
-// stall per call in the walk's inner loop).
-void child_across(const TetHierarchy& h, const WalkTables& wt, const NodeRef& p, std::uint32_t pword, int s, int f,
-                  const std::array<Across, 4>& pacr, Across& out) {
+// What lies across face f of child slot s of an internal node at depth pdepth (storage word
+// pword), given what lies across each face of the node (`pacr`); written into @p out field by
+// field (a returned temporary, built piecewise on the stack and copied, cost a
+// store-forwarding stall per call in the walk's inner loop).
+void child_across(const TetHierarchy& h, const WalkTables& wt, int pdepth, std::uint32_t pword, int s, int f,
+                  const std::array<WalkAcross, 4>& pacr, WalkAcross& out) {
   const TreeTable& t = wt.tree;
   const auto su = static_cast<std::size_t>(s);
   const auto link = t.face_link[su][static_cast<std::size_t>(f)];
   if (link.sibling >= 0) {
-    out.boundary = false;
-    out.node = p.child(link.sibling);
-    out.face = link.sibling_face;
-    out.vmap = wt.sibling[su][static_cast<std::size_t>(f)];
     out.word = h.child_word(pword, link.sibling);
+    out.depth = static_cast<std::uint8_t>(pdepth + 1);
+    out.face = link.sibling_face;
+    out.boundary = false;
+    out.vmap = wt.sibling[su][static_cast<std::size_t>(f)];
     return;
   }
   const auto pf = static_cast<std::size_t>(link.parent_face);
-  const Across& pa = pacr[pf];
-  if (pa.boundary || pa.node.depth < p.depth || TetHierarchy::state_of_word(pa.word) != NodeState::Internal) {
+  const WalkAcross& pa = pacr[pf];
+  if (pa.boundary || pa.depth < pdepth || TetHierarchy::state_of_word(pa.word) != NodeState::Internal) {
     out = pa;  // the mesh boundary or a coarser leaf
     return;
   }
-  // Same depth as the parent and refined: the child of pa.node holding our face.
+  // Same depth as the parent and refined: the child of the node across holding our face.
   std::array<int, 3> codes{};
   std::array<std::size_t, 3> ks{};
   int i = 0;
@@ -245,15 +271,16 @@ void child_across(const TetHierarchy& h, const WalkTables& wt, const NodeRef& p,
   int c = -1, cg = -1;
   std::array<int, 3> local{};
   if (!find_child_face(wt.child_face, pa.face, codes, c, cg, local)) {  // non-conforming input
-    out = Across{true, {}, -1, {}};
+    out = WalkAcross{};
+    out.boundary = true;
     return;
   }
-  out.boundary = false;
-  out.node = pa.node.child(c);
-  out.face = cg;
-  out.vmap = {-1, -1, -1, -1};
-  for (std::size_t j = 0; j < 3; ++j) out.vmap[ks[j]] = local[j];
   out.word = h.child_word(pa.word, c);
+  out.depth = static_cast<std::uint8_t>(pa.depth + 1);
+  out.face = static_cast<std::int8_t>(cg);
+  out.boundary = false;
+  out.vmap = {-1, -1, -1, -1};
+  for (std::size_t j = 0; j < 3; ++j) out.vmap[ks[j]] = static_cast<std::int8_t>(local[j]);
 }
 
 // What lies across face f of child slot s of node p when every node is taken as refined:
@@ -321,13 +348,12 @@ void push_face(const RootKeys& rk, const std::array<BaryKey, 3>& b, std::vector<
 }
 
 // Emits the parts of face `b` (root barycentric keys in our root, outward from our side)
-// bordering erased material, where node m (face g) lies across it at the same level; loc[i]
-// is m's local index of b[i]. The sub-face corners are integer midpoints of b (exact: m is
+// bordering erased material, where node m (storage word mword, face g) lies across it at the
+// same level; loc[i] is m's local index of b[i]. The sub-face corners are integer midpoints of b (exact: m is
 // internal, so its children's vertices are at depth ≤ kMaxDepth).
 // NOLINTNEXTLINE(misc-no-recursion): depth ≤ kMaxDepth
 void emit_against(const TetHierarchy& h, const ChildFaceTable& cft, const RootKeys& rk, const std::array<BaryKey, 3>& b,
-                  const std::array<int, 3>& loc, const NodeRef& m, std::uint32_t mword, int g,
-                  std::vector<SurfaceFace>& out) {
+                  const std::array<int, 3>& loc, std::uint32_t mword, int g, std::vector<SurfaceFace>& out) {
   const NodeState st = TetHierarchy::state_of_word(mword);
   if (st == NodeState::Full) return;
   if (st == NodeState::Erased) {
@@ -355,7 +381,7 @@ void emit_against(const TetHierarchy& h, const ChildFaceTable& cft, const RootKe
     if (cw == TetHierarchy::kFull) continue;
     emit_against(h, cft, rk,
                  {v[static_cast<std::size_t>(sub[0])], v[static_cast<std::size_t>(sub[1])], v[static_cast<std::size_t>(sub[2])]},
-                 local, m.child(c), cw, cg, out);
+                 local, cw, cg, out);
   }
 }
 
@@ -402,10 +428,10 @@ NodeGeometry child_geometry(const TreeTable& t, const NodeGeometry& g, std::size
 
 // Emits the visible faces of the full leaf of geometry g (face neighbours acr).
 void emit_leaf(const TetHierarchy& h, const ChildFaceTable& cft, const RootKeys& rk, const NodeGeometry& g,
-               const std::array<Across, 4>& acr, std::vector<SurfaceFace>& out) {
+               const std::array<WalkAcross, 4>& acr, std::vector<SurfaceFace>& out) {
   for (int f = 0; f < 4; ++f) {
     const auto fu = static_cast<std::size_t>(f);
-    const Across& a = acr[fu];
+    const WalkAcross& a = acr[fu];
     if (a.word == TetHierarchy::kFull) continue;
     std::array<int, 3> order{kFaceVerts[f][0], kFaceVerts[f][1], kFaceVerts[f][2]};
     if (g.flipped) std::swap(order[1], order[2]);
@@ -416,7 +442,7 @@ void emit_leaf(const TetHierarchy& h, const ChildFaceTable& cft, const RootKeys&
     } else {
       const std::array<int, 3> loc{a.vmap[static_cast<std::size_t>(order[0])], a.vmap[static_cast<std::size_t>(order[1])],
                                    a.vmap[static_cast<std::size_t>(order[2])]};
-      emit_against(h, cft, rk, b, loc, a.node, a.word, a.face, out);
+      emit_against(h, cft, rk, b, loc, a.word, a.face, out);
     }
   }
 }
@@ -426,8 +452,9 @@ void emit_leaf(const TetHierarchy& h, const ChildFaceTable& cft, const RootKeys&
 // states and its geometry come from its parent's in O(1). Erased children and full
 // children with four full neighbours cost one visit each and no further work.
 // NOLINTNEXTLINE(misc-no-recursion): depth ≤ kMaxDepth
-void visit(const TetHierarchy& h, const WalkTables& wt, const RootKeys& rk, const NodeRef& n, std::uint32_t word,
-           const NodeGeometry& g, const std::array<Across, 4>& acr, std::vector<SurfaceFace>& out, std::size_t& visits) {
+void visit(const TetHierarchy& h, const WalkTables& wt, const RootKeys& rk, int depth, std::uint32_t word,
+           const NodeGeometry& g, const std::array<WalkAcross, 4>& acr, std::vector<SurfaceFace>& out,
+           std::size_t& visits) {
   ++visits;
   const NodeState st = TetHierarchy::state_of_word(word);
   if (st == NodeState::Erased) return;
@@ -441,17 +468,17 @@ void visit(const TetHierarchy& h, const WalkTables& wt, const RootKeys& rk, cons
       ++visits;
       continue;
     }
-    std::array<Across, 4> cacr;
-    for (int f = 0; f < 4; ++f) child_across(h, wt, n, word, c, f, acr, cacr[static_cast<std::size_t>(f)]);
+    std::array<WalkAcross, 4> cacr;
+    for (int f = 0; f < 4; ++f) child_across(h, wt, depth, word, c, f, acr, cacr[static_cast<std::size_t>(f)]);
     const auto cu = static_cast<std::size_t>(c);
     if (cw == TetHierarchy::kFull) {
       ++visits;
       bool exposed = false;
-      for (const Across& a : cacr) exposed = exposed || a.word != TetHierarchy::kFull;
+      for (const WalkAcross& a : cacr) exposed = exposed || a.word != TetHierarchy::kFull;
       if (exposed) emit_leaf(h, wt.child_face, rk, child_geometry(wt.tree, g, cu), cacr, out);
       continue;
     }
-    visit(h, wt, rk, n.child(c), cw, child_geometry(wt.tree, g, cu), cacr, out, visits);
+    visit(h, wt, rk, depth + 1, cw, child_geometry(wt.tree, g, cu), cacr, out, visits);
   }
 }
 
@@ -708,19 +735,20 @@ std::uint32_t BoundarySurface::rebuild_range(const TetHierarchy& h, std::uint32_
     hi = 1;
   }
   hi = std::min<std::uint32_t>(hi, static_cast<std::uint32_t>(ch.size()));
-  const std::array<Across, 4> racr = root_acr(h, r);
+  std::array<WalkAcross, 4> racr;
+  for (int f = 0; f < 4; ++f) racr[static_cast<std::size_t>(f)] = walk_across(root_across(h, r, f));
   const WalkTables wt;
   const RootKeys rk(h, r);
   std::uint32_t c = lo;
   while (c < hi) {
     NodeRef node{r, 0, 0};
     std::uint32_t word = root_word;
-    std::array<Across, 4> acr = racr;
+    std::array<WalkAcross, 4> acr = racr;
     int d = 0;
     while (d < level && TetHierarchy::state_of_word(word) == NodeState::Internal) {
       const int s = static_cast<int>((c >> (3 * (level - d - 1))) & 7U);
-      std::array<Across, 4> cacr;
-      for (int f = 0; f < 4; ++f) child_across(h, wt, node, word, s, f, acr, cacr[static_cast<std::size_t>(f)]);
+      std::array<WalkAcross, 4> cacr;
+      for (int f = 0; f < 4; ++f) child_across(h, wt, d, word, s, f, acr, cacr[static_cast<std::size_t>(f)]);
       node = node.child(s);
       word = h.child_word(word, s);
       acr = cacr;
@@ -730,7 +758,7 @@ std::uint32_t BoundarySurface::rebuild_range(const TetHierarchy& h, std::uint32_
     const std::uint32_t ulo = c & ~(span - 1U);
     auto& out = ch[ulo];
     out.clear();
-    visit(h, wt, rk, node, word, h.geometry(node), acr, out, m_visits);
+    visit(h, wt, rk, node.depth, word, h.geometry(node), acr, out, m_visits);
     m_rebuilt_chunks.push_back({r, ulo});
     for (std::uint32_t k = ulo + 1; k < ulo + span; ++k) {
       if (ch[k].empty()) continue;
