@@ -202,23 +202,123 @@ Across root_across(const TetHierarchy& h, std::uint32_t r, int f) {
   return a;
 }
 
-// What the v_list walk keeps of what lies across a face (Across without the node's root and
-// path, which the walk never reads): 8 bytes, so a node's four are copied cheaply.
+// Face maps: how the 3 vertices of a node's face f correspond to those of the face g of the
+// node across, as one id = 6 g + p, p the index of the bijection between our face's
+// vertices and g's (both in increasing order). The v_list walk carries the id instead of a
+// vertex map, and steps from a node's neighbours to its children's with one table look-up.
+// Tabulated once from the vertex-map rules (sibling_map, find_child_face), so they agree.
+constexpr int kFaceMaps = 24;
+constexpr int kPerm3[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+
+struct FaceMapTables {
+  // vmap[f][id]: our vertex k ≠ f → the neighbour's local index (−1 at k = f).
+  std::array<std::array<std::array<std::int8_t, 4>, kFaceMaps>, 4> vmap{};
+  // A child face on its parent's face, across a neighbour refined like the parent: the
+  // neighbour's child holding the face, that child's face index and the map (child < 0:
+  // no such child, non-conforming input).
+  struct Step {
+    std::int8_t child = -1, map = -1;
+  };
+  // step[s][f][id of the parent's map on face_link[s][f].parent_face]
+  std::array<std::array<std::array<Step, kFaceMaps>, 4>, 8> step{};
+  std::array<std::array<std::int8_t, 4>, 8> sibling{};  // map id of sibling faces: sibling[s][f]
+
+  // The id of vertex map v of our face f (−1 when it is no bijection onto one face).
+  static int id_of(int f, const std::array<int, 4>& v) {
+    std::array<int, 3> ours{}, theirs{};
+    int n = 0, used = 0;
+    for (int k = 0; k < 4; ++k) {
+      if (k == f) continue;
+      const int w = v[static_cast<std::size_t>(k)];
+      if (w < 0 || w > 3 || ((used >> w) & 1) != 0) return -1;
+      used |= 1 << w;
+      ours[static_cast<std::size_t>(n++)] = w;
+    }
+    int g = -1;
+    for (int k = 0; k < 4; ++k)
+      if (((used >> k) & 1) == 0) g = k;
+    n = 0;
+    for (int k = 0; k < 4; ++k)
+      if (k != g) theirs[static_cast<std::size_t>(n++)] = k;
+    for (int p = 0; p < 6; ++p) {
+      bool same = true;
+      for (std::size_t i = 0; i < 3; ++i) same = same && ours[i] == theirs[static_cast<std::size_t>(kPerm3[p][i])];
+      if (same) return g * 6 + p;
+    }
+    return -1;
+  }
+
+  FaceMapTables() {
+    for (int f = 0; f < 4; ++f)
+      for (int id = 0; id < kFaceMaps; ++id) {
+        const int g = id / 6, p = id % 6;
+        std::array<int, 3> theirs{};
+        int n = 0;
+        for (int k = 0; k < 4; ++k)
+          if (k != g) theirs[static_cast<std::size_t>(n++)] = k;
+        auto& v = vmap[static_cast<std::size_t>(f)][static_cast<std::size_t>(id)];
+        v = {-1, -1, -1, -1};
+        n = 0;
+        for (int k = 0; k < 4; ++k)
+          if (k != f) v[static_cast<std::size_t>(k)] = static_cast<std::int8_t>(theirs[static_cast<std::size_t>(kPerm3[p][n++])]);
+      }
+    const TreeTable& t = TreeTable::get();
+    const auto& sib = sibling_map();
+    for (std::size_t s = 0; s < 8; ++s)
+      for (std::size_t f = 0; f < 4; ++f) {
+        const auto link = t.face_link[s][f];
+        if (link.sibling >= 0) {
+          sibling[s][f] = static_cast<std::int8_t>(id_of(static_cast<int>(f), sib[s][f]));
+          continue;
+        }
+        const auto pf = static_cast<std::size_t>(link.parent_face);
+        for (std::size_t id = 0; id < static_cast<std::size_t>(kFaceMaps); ++id) {
+          const auto& pv = vmap[pf][id];
+          std::array<int, 3> codes{};
+          std::array<std::size_t, 3> ks{};
+          int i = 0;
+          for (std::size_t k = 0; k < 4; ++k) {
+            if (k == f) continue;
+            codes[static_cast<std::size_t>(i)] = pair_code(pv[t.vertex[s][k][0]], pv[t.vertex[s][k][1]]);
+            ks[static_cast<std::size_t>(i++)] = k;
+          }
+          int c = -1, cg = -1;
+          std::array<int, 3> local{};
+          if (!find_child_face(static_cast<int>(id) / 6, codes, c, cg, local)) continue;
+          std::array<int, 4> cv{-1, -1, -1, -1};
+          for (std::size_t j = 0; j < 3; ++j) cv[ks[j]] = local[j];
+          const int cid = id_of(static_cast<int>(f), cv);
+          if (cid < 0 || cid / 6 != cg) continue;
+          step[s][f][id] = {static_cast<std::int8_t>(c), static_cast<std::int8_t>(cid)};
+        }
+      }
+  }
+};
+
+const FaceMapTables& face_map_tables() {
+  static const FaceMapTables kTables;
+  return kTables;
+}
+
+// What the v_list walk keeps of what lies across a face: the node's storage word, depth and
+// face map (Across without the node's root and path, which the walk never reads, and with
+// the vertex map as an id): 8 bytes, so a node's four are made and copied cheaply.
 struct WalkAcross {
   std::uint32_t word = TetHierarchy::kErased;  ///< storage word of the node across (boundary: erased)
   std::uint8_t depth = 0;                      ///< its depth
-  std::int8_t face = -1;                       ///< its face index for the shared face
+  std::int8_t map = -1;                        ///< face map id (FaceMapTables); its face is map / 6
   bool boundary = false;
-  std::array<std::int8_t, 4> vmap{-1, -1, -1, -1};  ///< as Across::vmap
 };
 
-WalkAcross walk_across(const Across& a) {
+WalkAcross walk_across(const Across& a, int f) {
   WalkAcross w;
   w.word = a.word;
   w.depth = a.node.depth;
-  w.face = static_cast<std::int8_t>(a.face);
   w.boundary = a.boundary;
-  for (std::size_t k = 0; k < 4; ++k) w.vmap[k] = static_cast<std::int8_t>(a.vmap[k]);
+  if (!a.boundary) {
+    w.map = static_cast<std::int8_t>(FaceMapTables::id_of(f, a.vmap));
+    if (w.map < 0 || w.map / 6 != a.face) w = WalkAcross{TetHierarchy::kErased, 0, -1, true};  // non-conforming
+  }
   return w;
 }
 
@@ -227,13 +327,7 @@ WalkAcross walk_across(const Across& a) {
 struct WalkTables {
   const TreeTable& tree = TreeTable::get();
   const ChildFaceTable& child_face = child_face_table();
-  std::array<std::array<std::array<std::int8_t, 4>, 4>, 8> sibling{};  // sibling_map() in bytes
-  WalkTables() {
-    const auto& m = sibling_map();
-    for (std::size_t c = 0; c < 8; ++c)
-      for (std::size_t g = 0; g < 4; ++g)
-        for (std::size_t k = 0; k < 4; ++k) sibling[c][g][k] = static_cast<std::int8_t>(m[c][g][k]);
-  }
+  const FaceMapTables& maps = face_map_tables();
 };
 
 // What lies across face f of child slot s of an internal node at depth pdepth (storage word
@@ -242,45 +336,31 @@ struct WalkTables {
 // store-forwarding stall per call in the walk's inner loop).
 void child_across(const TetHierarchy& h, const WalkTables& wt, int pdepth, std::uint32_t pword, int s, int f,
                   const std::array<WalkAcross, 4>& pacr, WalkAcross& out) {
-  const TreeTable& t = wt.tree;
   const auto su = static_cast<std::size_t>(s);
-  const auto link = t.face_link[su][static_cast<std::size_t>(f)];
+  const auto fu = static_cast<std::size_t>(f);
+  const auto link = wt.tree.face_link[su][fu];
   if (link.sibling >= 0) {
     out.word = h.child_word(pword, link.sibling);
     out.depth = static_cast<std::uint8_t>(pdepth + 1);
-    out.face = link.sibling_face;
+    out.map = wt.maps.sibling[su][fu];
     out.boundary = false;
-    out.vmap = wt.sibling[su][static_cast<std::size_t>(f)];
     return;
   }
-  const auto pf = static_cast<std::size_t>(link.parent_face);
-  const WalkAcross& pa = pacr[pf];
+  const WalkAcross& pa = pacr[static_cast<std::size_t>(link.parent_face)];
   if (pa.boundary || pa.depth < pdepth || TetHierarchy::state_of_word(pa.word) != NodeState::Internal) {
     out = pa;  // the mesh boundary or a coarser leaf
     return;
   }
   // Same depth as the parent and refined: the child of the node across holding our face.
-  std::array<int, 3> codes{};
-  std::array<std::size_t, 3> ks{};
-  int i = 0;
-  for (std::size_t k = 0; k < 4; ++k) {
-    if (static_cast<int>(k) == f) continue;
-    codes[static_cast<std::size_t>(i)] = pair_code(pa.vmap[t.vertex[su][k][0]], pa.vmap[t.vertex[su][k][1]]);
-    ks[static_cast<std::size_t>(i++)] = k;
-  }
-  int c = -1, cg = -1;
-  std::array<int, 3> local{};
-  if (!find_child_face(wt.child_face, pa.face, codes, c, cg, local)) {  // non-conforming input
-    out = WalkAcross{};
-    out.boundary = true;
+  const auto st = wt.maps.step[su][fu][static_cast<std::size_t>(pa.map)];
+  if (st.child < 0) {  // non-conforming input
+    out = WalkAcross{TetHierarchy::kErased, 0, -1, true};
     return;
   }
-  out.word = h.child_word(pa.word, c);
+  out.word = h.child_word(pa.word, st.child);
   out.depth = static_cast<std::uint8_t>(pa.depth + 1);
-  out.face = static_cast<std::int8_t>(cg);
+  out.map = st.map;
   out.boundary = false;
-  out.vmap = {-1, -1, -1, -1};
-  for (std::size_t j = 0; j < 3; ++j) out.vmap[ks[j]] = static_cast<std::int8_t>(local[j]);
 }
 
 // What lies across face f of child slot s of node p when every node is taken as refined:
@@ -427,7 +507,7 @@ NodeGeometry child_geometry(const TreeTable& t, const NodeGeometry& g, std::size
 }
 
 // Emits the visible faces of the full leaf of geometry g (face neighbours acr).
-void emit_leaf(const TetHierarchy& h, const ChildFaceTable& cft, const RootKeys& rk, const NodeGeometry& g,
+void emit_leaf(const TetHierarchy& h, const WalkTables& wt, const RootKeys& rk, const NodeGeometry& g,
                const std::array<WalkAcross, 4>& acr, std::vector<SurfaceFace>& out) {
   for (int f = 0; f < 4; ++f) {
     const auto fu = static_cast<std::size_t>(f);
@@ -440,9 +520,10 @@ void emit_leaf(const TetHierarchy& h, const ChildFaceTable& cft, const RootKeys&
     if (a.word == TetHierarchy::kErased) {
       push_face(rk, b, out);
     } else {
-      const std::array<int, 3> loc{a.vmap[static_cast<std::size_t>(order[0])], a.vmap[static_cast<std::size_t>(order[1])],
-                                   a.vmap[static_cast<std::size_t>(order[2])]};
-      emit_against(h, cft, rk, b, loc, a.word, a.face, out);
+      const auto& vmap = wt.maps.vmap[fu][static_cast<std::size_t>(a.map)];
+      const std::array<int, 3> loc{vmap[static_cast<std::size_t>(order[0])], vmap[static_cast<std::size_t>(order[1])],
+                                   vmap[static_cast<std::size_t>(order[2])]};
+      emit_against(h, wt.child_face, rk, b, loc, a.word, a.map / 6, out);
     }
   }
 }
@@ -459,7 +540,7 @@ void visit(const TetHierarchy& h, const WalkTables& wt, const RootKeys& rk, int 
   const NodeState st = TetHierarchy::state_of_word(word);
   if (st == NodeState::Erased) return;
   if (st == NodeState::Full) {
-    emit_leaf(h, wt.child_face, rk, g, acr, out);
+    emit_leaf(h, wt, rk, g, acr, out);
     return;
   }
   for (int c = 0; c < 8; ++c) {
@@ -475,7 +556,7 @@ void visit(const TetHierarchy& h, const WalkTables& wt, const RootKeys& rk, int 
       ++visits;
       bool exposed = false;
       for (const WalkAcross& a : cacr) exposed = exposed || a.word != TetHierarchy::kFull;
-      if (exposed) emit_leaf(h, wt.child_face, rk, child_geometry(wt.tree, g, cu), cacr, out);
+      if (exposed) emit_leaf(h, wt, rk, child_geometry(wt.tree, g, cu), cacr, out);
       continue;
     }
     visit(h, wt, rk, depth + 1, cw, child_geometry(wt.tree, g, cu), cacr, out, visits);
@@ -736,7 +817,7 @@ std::uint32_t BoundarySurface::rebuild_range(const TetHierarchy& h, std::uint32_
   }
   hi = std::min<std::uint32_t>(hi, static_cast<std::uint32_t>(ch.size()));
   std::array<WalkAcross, 4> racr;
-  for (int f = 0; f < 4; ++f) racr[static_cast<std::size_t>(f)] = walk_across(root_across(h, r, f));
+  for (int f = 0; f < 4; ++f) racr[static_cast<std::size_t>(f)] = walk_across(root_across(h, r, f), f);
   const WalkTables wt;
   const RootKeys rk(h, r);
   std::uint32_t c = lo;
