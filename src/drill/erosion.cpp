@@ -94,7 +94,7 @@ void make_children(const std::array<Vec3, 4>& p, const Vec3& c, double r, std::u
                    detail::ErosionChildren& k) {
   const ChildPoints& cp = child_points();
   const double r2 = r * r;
-  std::array<Vec3, 10> q;
+  auto& q = k.point;
   unsigned in = 0;  // bit i: point i lies in the sphere
   for (std::size_t i = 0; i < 10; ++i) {
     q[i] = 0.5 * (p[cp.ends[i][0]] + p[cp.ends[i][1]]);
@@ -102,21 +102,24 @@ void make_children(const std::array<Vec3, 4>& p, const Vec3& c, double r, std::u
   }
   for (std::size_t s = 0; s < 8; ++s) {
     if (((skip >> s) & 1U) != 0) continue;
-    auto& x = k.x[s];
+    const auto& pt = cp.point[s];
+    const std::array<const Vec3*, 4> x{&q[pt[0]], &q[pt[1]], &q[pt[2]], &q[pt[3]]};
     std::uint8_t inside = 0;
-    for (std::size_t v = 0; v < 4; ++v) {
-      const std::size_t i = cp.point[s][v];
-      x[v] = q[i];
-      inside = static_cast<std::uint8_t>(inside | (((in >> i) & 1U) << v));
-    }
-    const Vec3 centroid = 0.25 * (x[0] + x[1] + x[2] + x[3]);
+    for (std::size_t v = 0; v < 4; ++v) inside = static_cast<std::uint8_t>(inside | (((in >> pt[v]) & 1U) << v));
+    const Vec3 centroid = 0.25 * (*x[0] + *x[1] + *x[2] + *x[3]);
     double rad2 = 0.0;
-    for (const auto& v : x) rad2 = std::max(rad2, (v - centroid).squaredNorm());
+    for (const Vec3* v : x) rad2 = std::max(rad2, (*v - centroid).squaredNorm());
     const double reach = r + std::sqrt(rad2);
     k.d2[s] = (c - centroid).squaredNorm();
     k.beyond[s] = k.d2[s] > reach * reach;
     k.inside[s] = inside;
   }
+}
+
+// Vertices of child slot s of detail::ErosionChildren k.
+std::array<Vec3, 4> child_vertices(const detail::ErosionChildren& k, std::size_t s) {
+  const auto& pt = child_points().point[s];
+  return {k.point[pt[0]], k.point[pt[1]], k.point[pt[2]], k.point[pt[3]]};
 }
 
 // Bit s set when child s of the internal node of storage word `word` is an erased leaf.
@@ -140,8 +143,9 @@ bool would_remove_below(const std::array<Vec3, 4>& x, int depth, int finest, con
   const double r2 = r * r;
   for (std::size_t s = 0; s < 8; ++s) {
     ++visits;
-    const auto& ch = k.x[s];
-    if (sphere_misses(ch, c, r2, k.beyond[s], k.d2[s], k.inside[s])) continue;
+    if (k.beyond[s]) continue;
+    const std::array<Vec3, 4> ch = child_vertices(k, s);
+    if (sphere_misses(ch, c, r2, false, k.d2[s], k.inside[s])) continue;
     if (k.inside[s] == 0xF) return true;  // entirely inside
     if (depth + 1 >= finest) {
       if (k.d2[s] <= r2) return true;  // the centroid is inside
@@ -403,6 +407,14 @@ ErosionStats Eroder::run(TetHierarchy& hierarchy, std::size_t max_node_visits) {
         }
         const auto s = static_cast<std::size_t>(f.next_child++);
         const detail::ErosionChildren& kids = m_children[f.node.depth];
+        // f.word stays readable for the rest of its children: its block is freed only when all
+        // 8 children are erased (merge), which leaves the slots after the current one reading
+        // kErased, and nothing is refined (no block reused) until the frame is done.
+        const std::uint32_t cw = hierarchy.child_word(f.word, static_cast<int>(s));
+        if (cw == TetHierarchy::kErased || kids.beyond[s]) {
+          ++m_visits;  // what enter() does for an erased child or one the sphere misses
+          continue;
+        }
         std::array<std::int8_t, 4> crf{-1, -1, -1, -1};
         for (std::size_t k = 0; k < 4; ++k) {
           const int pf = t.face_link[s][k].parent_face;
@@ -410,12 +422,8 @@ ErosionStats Eroder::run(TetHierarchy& hierarchy, std::size_t max_node_visits) {
         }
         const NodeRef child = f.node.child(static_cast<int>(s));
         const int finest = f.finest;
-        // f.word stays readable for the rest of its children: its block is freed only when all
-        // 8 children are erased (merge), which leaves the slots after the current one reading
-        // kErased, and nothing is refined (no block reused) until the frame is done.
-        const std::uint32_t cw = hierarchy.child_word(f.word, static_cast<int>(s));
         // May push (invalidates f; overwrites only the next depth's children, not kids).
-        e = enter(hierarchy, child, cw, kids.x[s], kids.beyond[s], kids.d2[s], kids.inside[s], finest, crf, stats);
+        e = enter(hierarchy, child, cw, child_vertices(kids, s), false, kids.d2[s], kids.inside[s], finest, crf, stats);
       } else if (m_next_candidate < m_candidates.size()) {
         const std::uint32_t r = m_candidates[m_next_candidate++];
         const NodeRef root{r, 0, 0};

@@ -14,7 +14,7 @@ namespace detail {
 /// Implementation detail of Eroder: the 8 children of a node for one burr sphere, with the
 /// per-node tests that need no face plane done for all 8 when the node is entered.
 struct ErosionChildren {
-  std::array<std::array<Vec3, 4>, 8> x;  ///< child vertices (mm), TreeTable order
+  std::array<Vec3, 10> point;            ///< the node's vertices and edge midpoints (mm) the children are made of
   std::array<double, 8> d2{};             ///< squared distance (mm²) from the sphere centre to each centroid
   std::array<bool, 8> beyond{};           ///< the sphere misses the child's vertex bounding sphere
   std::array<std::uint8_t, 8> inside{};   ///< bit k: vertex k lies in the sphere
