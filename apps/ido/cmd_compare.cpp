@@ -4,6 +4,7 @@
 // only: the scores come from ido::segment.
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <string>
 
 #include <fmt/format.h>
@@ -23,6 +24,7 @@ struct CompareOptions {
   std::string mesh;
   std::string truth;
   int label = -1;
+  std::optional<double> truth_below;  // truth is a level set: inside where value < this
   bool json = false;
 };
 
@@ -35,11 +37,21 @@ image::Volume<std::uint8_t> read_mask(const std::string& path, int label) {
   return m;
 }
 
+/// Reads a level-set or distance volume: voxels with a value below @p level are inside.
+image::Volume<std::uint8_t> read_level_set_mask(const std::string& path, double level) {
+  const auto v = io::read_volume(path);
+  auto m = v.like<std::uint8_t>(0);
+  for (std::size_t n = 0; n < v.data().size(); ++n) m.data()[n] = static_cast<double>(v.data()[n]) < level;
+  return m;
+}
+
 nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
 void run(const CompareOptions& o) {
   if (o.mask.empty() == o.mesh.empty()) throw InvalidInput("give exactly one of --mask and --mesh");
-  const auto truth = read_mask(o.truth, o.label);
+  if (o.truth_below && !std::isfinite(*o.truth_below))
+    throw InvalidInput(fmt::format("--truth-below must be a finite number, got {}", *o.truth_below));
+  const auto truth = o.truth_below ? read_level_set_mask(o.truth, *o.truth_below) : read_mask(o.truth, o.label);
   const segment::SegmentationScores s =
       o.mask.empty() ? segment::compare_mesh_to_mask(io::read_triangle_mesh(o.mesh), truth)
                      : segment::compare_masks(read_mask(o.mask, o.label), truth);
@@ -79,6 +91,9 @@ void setup(CLI::App& app, const GlobalOptions& /*g*/) {
   sub->add_option("--mesh", opts->mesh, "Closed surface (.stl, .ply, .obj, .vtp) to rasterise on the truth grid");
   sub->add_option("--truth", opts->truth, "Ground-truth mask volume")->required();
   sub->add_option("--label", opts->label, "Only voxels equal to this value are inside (both volumes)");
+  sub->add_option("--truth-below", opts->truth_below,
+                  "The truth is a level set or distance map: inside where its value is below this (e.g. 0 for "
+                  "VMTK's level sets); --label then applies to the mask only");
   sub->add_flag("--json", opts->json, "Print the scores as JSON");
   sub->callback([opts] { run(*opts); });
 }
