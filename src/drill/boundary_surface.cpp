@@ -222,6 +222,14 @@ struct FaceMapTables {
   // step[s][f][id of the parent's map on face_link[s][f].parent_face]
   std::array<std::array<std::array<Step, kFaceMaps>, 4>, 8> step{};
   std::array<std::array<std::int8_t, 4>, 8> sibling{};  // map id of sibling faces: sibling[s][f]
+  // A face being split against a finer neighbour is given by its 3 vertices in emission
+  // order; its map to the neighbour's face is the id of vertex map {loc0, loc1, loc2, −1} of
+  // face 3 (position i ↦ the neighbour's local index). lead[f][id][flipped]: that id for
+  // face f of a leaf with face map id (vertex order kFaceVerts[f], 1 and 2 swapped when
+  // flipped). split[id][i]: sub-face i of emit_against's kSub against the neighbour's child
+  // holding it, and the sub-face's id against that child.
+  std::array<std::array<std::array<std::int8_t, 2>, kFaceMaps>, 4> lead{};
+  std::array<std::array<Step, 4>, kFaceMaps> split{};
 
   // The id of vertex map v of our face f (−1 when it is no bijection onto one face).
   static int id_of(int f, const std::array<int, 4>& v) {
@@ -292,6 +300,34 @@ struct FaceMapTables {
           step[s][f][id] = {static_cast<std::int8_t>(c), static_cast<std::int8_t>(cid)};
         }
       }
+    for (int f = 0; f < 4; ++f)
+      for (int id = 0; id < kFaceMaps; ++id)
+        for (int fl = 0; fl < 2; ++fl) {
+          std::array<int, 3> order{kFaceVerts[f][0], kFaceVerts[f][1], kFaceVerts[f][2]};
+          if (fl != 0) std::swap(order[1], order[2]);
+          const auto& v = vmap[static_cast<std::size_t>(f)][static_cast<std::size_t>(id)];
+          lead[static_cast<std::size_t>(f)][static_cast<std::size_t>(id)][static_cast<std::size_t>(fl)] =
+              static_cast<std::int8_t>(id_of(3, {v[static_cast<std::size_t>(order[0])], v[static_cast<std::size_t>(order[1])],
+                                                 v[static_cast<std::size_t>(order[2])], -1}));
+        }
+    static constexpr int kSub[4][3] = {{0, 3, 5}, {3, 1, 4}, {5, 4, 2}, {3, 4, 5}};
+    for (std::size_t id = 0; id < static_cast<std::size_t>(kFaceMaps); ++id) {
+      const auto& loc = vmap[3][id];
+      auto code_of = [&](int v) {
+        if (v < 3) return pair_code(loc[static_cast<std::size_t>(v)], loc[static_cast<std::size_t>(v)]);
+        const int e = v - 3;
+        return pair_code(loc[static_cast<std::size_t>(e)], loc[static_cast<std::size_t>((e + 1) % 3)]);
+      };
+      for (std::size_t i = 0; i < 4; ++i) {
+        const std::array<int, 3> codes{code_of(kSub[i][0]), code_of(kSub[i][1]), code_of(kSub[i][2])};
+        int c = -1, cg = -1;
+        std::array<int, 3> local{};
+        if (!find_child_face(static_cast<int>(id) / 6, codes, c, cg, local)) continue;
+        const int cid = id_of(3, {local[0], local[1], local[2], -1});
+        if (cid < 0 || cid / 6 != cg) continue;
+        split[id][i] = {static_cast<std::int8_t>(c), static_cast<std::int8_t>(cid)};
+      }
+    }
   }
 };
 
@@ -326,7 +362,6 @@ WalkAcross walk_across(const Across& a, int f) {
 // is a function-local static).
 struct WalkTables {
   const TreeTable& tree = TreeTable::get();
-  const ChildFaceTable& child_face = child_face_table();
   const FaceMapTables& maps = face_map_tables();
 };
 
@@ -428,12 +463,12 @@ void push_face(const RootKeys& rk, const std::array<BaryKey, 3>& b, std::vector<
 }
 
 // Emits the parts of face `b` (root barycentric keys in our root, outward from our side)
-// bordering erased material, where node m (storage word mword, face g) lies across it at the
-// same level; loc[i] is m's local index of b[i]. The sub-face corners are integer midpoints of b (exact: m is
+// bordering erased material, where node m (storage word mword) lies across it at the same
+// level; @p id is the face's map to m's face (FaceMapTables::lead / split). The sub-face corners are integer midpoints of b (exact: m is
 // internal, so its children's vertices are at depth ≤ kMaxDepth).
 // NOLINTNEXTLINE(misc-no-recursion): depth ≤ kMaxDepth
-void emit_against(const TetHierarchy& h, const ChildFaceTable& cft, const RootKeys& rk, const std::array<BaryKey, 3>& b,
-                  const std::array<int, 3>& loc, std::uint32_t mword, int g, std::vector<SurfaceFace>& out) {
+void emit_against(const TetHierarchy& h, const FaceMapTables& fm, const RootKeys& rk, const std::array<BaryKey, 3>& b,
+                  int id, std::uint32_t mword, std::vector<SurfaceFace>& out) {
   const NodeState st = TetHierarchy::state_of_word(mword);
   if (st == NodeState::Full) return;
   if (st == NodeState::Erased) {
@@ -442,26 +477,21 @@ void emit_against(const TetHierarchy& h, const ChildFaceTable& cft, const RootKe
   }
   // Sub-face vertices: 0..2 = corners, 3 + e = midpoint of edge e (e: 0-1, 1-2, 2-0).
   std::array<BaryKey, 6> v;
-  std::array<int, 6> code{};
   for (std::size_t e = 0; e < 3; ++e) {
     const std::size_t e1 = (e + 1) % 3;
     v[e] = b[e];
     for (std::size_t j = 0; j < 4; ++j) v[3 + e][j] = (b[e][j] + b[e1][j]) / 2;
-    code[e] = pair_code(loc[e], loc[e]);
-    code[3 + e] = pair_code(loc[e], loc[e1]);
   }
   static constexpr int kSub[4][3] = {{0, 3, 5}, {3, 1, 4}, {5, 4, 2}, {3, 4, 5}};
-  for (const auto& sub : kSub) {
-    const std::array<int, 3> codes{code[static_cast<std::size_t>(sub[0])], code[static_cast<std::size_t>(sub[1])],
-                                   code[static_cast<std::size_t>(sub[2])]};
-    int c = -1, cg = -1;
-    std::array<int, 3> local{};
-    if (!find_child_face(cft, g, codes, c, cg, local)) continue;
-    const std::uint32_t cw = h.child_word(mword, c);
+  for (std::size_t i = 0; i < 4; ++i) {
+    const auto sub = fm.split[static_cast<std::size_t>(id)][i];
+    if (sub.child < 0) continue;  // non-conforming input
+    const std::uint32_t cw = h.child_word(mword, sub.child);
     if (cw == TetHierarchy::kFull) continue;
-    emit_against(h, cft, rk,
-                 {v[static_cast<std::size_t>(sub[0])], v[static_cast<std::size_t>(sub[1])], v[static_cast<std::size_t>(sub[2])]},
-                 local, cw, cg, out);
+    emit_against(h, fm, rk,
+                 {v[static_cast<std::size_t>(kSub[i][0])], v[static_cast<std::size_t>(kSub[i][1])],
+                  v[static_cast<std::size_t>(kSub[i][2])]},
+                 sub.map, cw, out);
   }
 }
 
@@ -520,10 +550,7 @@ void emit_leaf(const TetHierarchy& h, const WalkTables& wt, const RootKeys& rk, 
     if (a.word == TetHierarchy::kErased) {
       push_face(rk, b, out);
     } else {
-      const auto& vmap = wt.maps.vmap[fu][static_cast<std::size_t>(a.map)];
-      const std::array<int, 3> loc{vmap[static_cast<std::size_t>(order[0])], vmap[static_cast<std::size_t>(order[1])],
-                                   vmap[static_cast<std::size_t>(order[2])]};
-      emit_against(h, wt.child_face, rk, b, loc, a.word, a.map / 6, out);
+      emit_against(h, wt.maps, rk, b, wt.maps.lead[fu][static_cast<std::size_t>(a.map)][g.flipped ? 1 : 0], a.word, out);
     }
   }
 }
