@@ -308,8 +308,9 @@ inline bool boxes_overlap(const CellBox& p, const CellBox& q) {
          p.lo[2] <= q.hi[2] && q.lo[2] <= p.hi[2];
 }
 
-/// Work limits after which the grid gives up for the BVH (very uneven triangle sizes).
-std::size_t entry_budget(std::size_t n) { return 32 * n + 4096; }
+/// Work limits after which the grid gives up for the BVH (very uneven triangle sizes). The
+/// entry limit also keeps entry indices (+ 1) within 32 bits.
+std::size_t entry_budget(std::size_t n) { return std::min<std::size_t>(32 * n + 4096, 0xffff'0000u); }
 std::size_t visit_budget(std::size_t n) { return 256 * n + (std::size_t{1} << 22); }
 
 /// The cells of a box: [lo, hi] per axis.
