@@ -8,7 +8,6 @@
 #include <cmath>
 #include <queue>
 #include <string>
-#include <unordered_map>
 
 #include "ido/core/error.h"
 
@@ -104,8 +103,6 @@ SurfaceRemesher::SurfaceRemesher(const geometry::TriangleMesh& mesh, std::vector
   m_triangle_alive.assign(m_triangles.size(), 1);
   m_vertex_triangles.assign(m_vertices.size(), {});
   m_alive_vertices = nv;
-  std::unordered_map<std::uint64_t, int> directed;
-  directed.reserve(m_triangles.size() * 3);
   for (std::size_t t = 0; t < m_triangles.size(); ++t) {
     const Tri& tr = m_triangles[t];
     for (int k = 0; k < 3; ++k) {
@@ -115,16 +112,24 @@ SurfaceRemesher::SurfaceRemesher(const geometry::TriangleMesh& mesh, std::vector
     }
     if (tr[0] == tr[1] || tr[1] == tr[2] || tr[0] == tr[2])
       throw InvalidInput("remesh: triangle " + std::to_string(t) + " repeats a vertex");
-    for (int k = 0; k < 3; ++k) {
-      const std::int32_t a = tr[k], b = tr[(k + 1) % 3];
-      // +1 for a<b direction, +16 for the other: a closed oriented manifold edge gives 17.
-      directed[edge_key(a, b)] += a < b ? 1 : 16;
-    }
   }
-  for (const auto& [key, count] : directed)
-    if (count != 17)
-      throw InvalidInput("remesh: the mesh is not a closed, consistently oriented 2-manifold (edge " +
-                         std::to_string(key >> 32) + "-" + std::to_string(key & 0xffffffffu) + ")");
+  // A closed, consistently oriented manifold edge runs once each way: around every vertex a,
+  // each a→b of its triangles occurs once, and so does b→a.
+  std::vector<std::int32_t> outgoing, incoming;
+  for (std::int32_t a = 0; a < static_cast<std::int32_t>(nv); ++a) {
+    outgoing.clear();
+    incoming.clear();
+    for (std::int32_t t : m_vertex_triangles[std::size_t(a)]) {
+      const Tri& tr = m_triangles[std::size_t(t)];
+      const int k = tr[0] == a ? 0 : tr[1] == a ? 1 : 2;
+      outgoing.push_back(tr[(k + 1) % 3]);
+      incoming.push_back(tr[(k + 2) % 3]);
+    }
+    for (std::int32_t b : outgoing)
+      if (std::count(outgoing.begin(), outgoing.end(), b) != 1 || std::count(incoming.begin(), incoming.end(), b) != 1)
+        throw InvalidInput("remesh: the mesh is not a closed, consistently oriented 2-manifold (edge " +
+                           std::to_string(std::min(a, b)) + "-" + std::to_string(std::max(a, b)) + ")");
+  }
 }
 
 std::int64_t SurfaceRemesher::split_long_edges(double max_length_mm) {

@@ -107,46 +107,97 @@ image::Volume<float> signed_distance(const geometry::TriangleMesh& surface,
       },
       options.threaded, 1);
 
-  // Sign: winding number at band voxels; one evaluation per connected far component.
+  // Sign. The winding number of a closed surface is constant off it, so two 6-neighbours p, q
+  // (a spacing L apart) share it when the segment pq misses every triangle. The distance to
+  // the surface is 1-Lipschitz, so along pq it stays above (d(p) + d(q) − L) / 2: the step is
+  // safe when d(p) + d(q) > L. Grid points joined by safe steps form components that take the
+  // sign of one winding-number evaluation each; only points with no safe step (on or very
+  // near the surface) evaluate it themselves. d here is a lower bound of the distance to every
+  // triangle: the computed distance (to the counted triangles, at most band_mm), capped at
+  // 1.01 × the largest spacing, and 0 within that reach of an uncounted triangle's box.
   const geometry::WindingNumber winding(surface, {.beta = options.winding_beta});
   const auto total = static_cast<std::int64_t>(dist.size());
-  const float fband = static_cast<float>(band);
+  const double reach = 1.01 * grid.spacing().maxCoeff();
+  std::vector<std::uint8_t> near_uncounted(dist.size(), 0);
+  if (!options.distance_triangles.empty()) {
+    const Vec3 pad_reach = (Vec3::Constant(reach).array() / grid.spacing().array()).matrix();
+    for (std::size_t t = 0; t < surface.triangles.size(); ++t) {
+      if (options.distance_triangles[t]) continue;
+      Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
+      for (std::int32_t v : surface.triangles[t]) {
+        const Vec3 idx = grid.world_to_index(surface.vertices[v]);
+        lo = lo.cwiseMin(idx);
+        hi = hi.cwiseMax(idx);
+      }
+      std::int64_t bl[3], bh[3];
+      for (int a = 0; a < 3; ++a) {
+        const double pad = grid.direction().isIdentity(1e-9) ? pad_reach[a] : pad_reach.maxCoeff();
+        bl[a] = std::max<std::int64_t>(0, static_cast<std::int64_t>(std::ceil(lo[a] - pad)));
+        bh[a] = std::min<std::int64_t>(n[a] - 1, static_cast<std::int64_t>(std::floor(hi[a] + pad)));
+      }
+      for (std::int64_t k = bl[2]; k <= bh[2]; ++k)
+        for (std::int64_t j = bl[1]; j <= bh[1]; ++j)
+          for (std::int64_t i = bl[0]; i <= bh[0]; ++i) near_uncounted[out.linear_index(i, j, k)] = 1;
+    }
+  }
+  auto bound = [&](std::size_t v) { return near_uncounted[v] ? 0.0 : std::min(double(std::abs(dist[v])), reach); };
+  // A step along axis a is safe when the bounds add up to more than its length (with a
+  // margin far above the float rounding of the distances).
+  const std::int64_t stride[3] = {1, n[0], n[0] * n[1]};
+  double need[3];
+  for (int a = 0; a < 3; ++a) need[a] = grid.spacing()[a] * (1.0 + 1e-4) + 1e-9;
+  auto for_safe_neighbours = [&](std::int64_t v, auto&& visit) {
+    const std::int64_t c[3] = {v % n[0], (v / n[0]) % n[1], v / (n[0] * n[1])};
+    const double bv = bound(std::size_t(v));
+    for (int a = 0; a < 3; ++a)
+      for (int sgn : {-1, 1}) {
+        const std::int64_t ca = c[a] + sgn;
+        if (ca < 0 || ca >= n[a]) continue;
+        const std::int64_t w = v + sgn * stride[a];
+        if (bv + bound(std::size_t(w)) > need[a] && visit(w)) return;
+      }
+  };
+  auto inside_at = [&](std::int64_t v) {
+    const Vec3 p = grid.index_to_world(Vec3(double(v % n[0]), double((v / n[0]) % n[1]), double(v / (n[0] * n[1]))));
+    return winding.at(p) > 0.5;
+  };
+  // Inside is strictly negative, also at a grid point lying on a counted triangle (distance
+  // 0), so a zero-level extraction never sees an inside point as outside.
+  auto make_inside = [&](std::int64_t v) { dist[v] = -std::max(dist[v], std::numeric_limits<float>::min()); };
+  // Points without a safe step evaluate the winding number themselves, in parallel.
+  std::vector<std::uint8_t> seen(dist.size(), 0);
   parallel_for(
       static_cast<std::size_t>(total),
       [&](std::size_t idx) {
-        if (dist[idx] >= fband) return;
-        const std::int64_t i = std::int64_t(idx) % n[0];
-        const std::int64_t j = (std::int64_t(idx) / n[0]) % n[1];
-        const std::int64_t k = std::int64_t(idx) / (n[0] * n[1]);
-        const Vec3 p = grid.index_to_world(Vec3(double(i), double(j), double(k)));
-        // Inside is strictly negative, also at a grid point lying on a counted triangle
-        // (distance 0), so a zero-level extraction never sees an inside point as outside.
-        if (winding.at(p) > 0.5) dist[idx] = -std::max(dist[idx], std::numeric_limits<float>::min());
+        bool any = false;
+        for_safe_neighbours(std::int64_t(idx), [&](std::int64_t) { return any = true; });
+        seen[idx] = any ? 0 : 1;
       },
       options.threaded, 1024);
-  std::vector<std::uint8_t> seen(dist.size(), 0);
+  parallel_for(
+      static_cast<std::size_t>(total),
+      [&](std::size_t idx) {
+        if (seen[idx] && inside_at(std::int64_t(idx))) make_inside(std::int64_t(idx));
+      },
+      options.threaded, 1024);
+  // The others: one evaluation per component of safe steps.
   std::vector<std::int64_t> stack;
   for (std::int64_t start = 0; start < total; ++start) {
-    if (seen[start] || dist[start] < fband) continue;
-    const std::int64_t i0 = start % n[0], j0 = (start / n[0]) % n[1], k0 = start / (n[0] * n[1]);
-    const bool inside =
-        winding.at(grid.index_to_world(Vec3(double(i0), double(j0), double(k0)))) > 0.5;
+    if (seen[start]) continue;
+    const bool inside = inside_at(start);
     stack.push_back(start);
     seen[start] = 1;
     while (!stack.empty()) {
       const std::int64_t v = stack.back();
       stack.pop_back();
-      if (inside) dist[v] = -fband;
-      const std::int64_t i = v % n[0], j = (v / n[0]) % n[1], k = v / (n[0] * n[1]);
-      const std::int64_t nb[6][3] = {{i - 1, j, k}, {i + 1, j, k}, {i, j - 1, k},
-                                     {i, j + 1, k}, {i, j, k - 1}, {i, j, k + 1}};
-      for (const auto& q : nb) {
-        if (!out.contains(q[0], q[1], q[2])) continue;
-        const auto w = static_cast<std::int64_t>(out.linear_index(q[0], q[1], q[2]));
-        if (seen[w] || dist[w] < fband) continue;
-        seen[w] = 1;
-        stack.push_back(w);
-      }
+      for_safe_neighbours(v, [&](std::int64_t w) {
+        if (!seen[w]) {
+          seen[w] = 1;
+          stack.push_back(w);
+        }
+        return false;
+      });
+      if (inside) make_inside(v);
     }
   }
   return out;

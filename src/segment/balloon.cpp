@@ -281,14 +281,29 @@ struct Balloon::State {
       // Drori & Cohen-Or, "Bilateral mesh denoising", SIGGRAPH 2003): across a sharp bend (a
       // twig's tip, a thin process) the neighbour's offset belongs to a differently facing wall.
       const double bend = opt.edge_offset_bend_deg > 0 ? 1.0 - std::cos(opt.edge_offset_bend_deg * kPi / 180.0) : 0.0;
+      // The weights depend only on the normals: computed once for all passes.
+      std::vector<double> weight(3 * triangles.size(), 0.0);
+      parallel_for(
+          triangles.size(),
+          [&](std::size_t q) {
+            const Tri& t = triangles[q];
+            for (int k = 0; k < 3; ++k) {
+              const std::int32_t a = t[k], b = t[(k + 1) % 3];
+              if (snapped[b])
+                weight[3 * q + std::size_t(k)] =
+                    bend > 0 ? std::exp(-(1.0 - d.normals[a].dot(d.normals[b])) / bend) : 1.0;
+            }
+          },
+          opt.threaded, 2048);
       for (int pass = 0; pass < opt.edge_offset_smoothing; ++pass) {
         std::vector<double> sum(n, 0.0);
         std::vector<double> cnt(n, 0);
-        for (const Tri& t : triangles)
+        for (std::size_t q = 0; q < triangles.size(); ++q)
           for (int k = 0; k < 3; ++k) {
+            const Tri& t = triangles[q];
             const std::int32_t a = t[k], b = t[(k + 1) % 3];
             if (!snapped[b]) continue;
-            const double wgt = bend > 0 ? std::exp(-(1.0 - d.normals[a].dot(d.normals[b])) / bend) : 1.0;
+            const double wgt = weight[3 * q + std::size_t(k)];
             sum[a] += wgt * normal_mm[b];
             cnt[a] += wgt;
           }

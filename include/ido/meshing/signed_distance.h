@@ -32,9 +32,12 @@ struct SignedDistanceOptions {
 /// self-intersecting or slightly open surfaces still get a sensible inside. Within
 /// options.band_mm of the surface the magnitude is the exact Euclidean distance to the
 /// nearest counted triangle (an inside point lying on a triangle gets −FLT_MIN, never 0:
-/// inside values are strictly negative); beyond it, the value is ±band_mm and the sign is
-/// decided once per connected component of far voxels (exact as long as band_mm exceeds the
-/// grid's largest spacing). Runs in O(triangles × band voxels + grid voxels).
+/// inside values are strictly negative); beyond it, the value is ±band_mm. The winding number
+/// is evaluated only at grid points within about the grid's largest spacing of the surface
+/// (or of an uncounted triangle); every other grid point takes the sign of one evaluation per
+/// connected component of such points, which is exact because a grid step from a point
+/// farther than a spacing from every triangle cannot cross the surface (it needs band_mm
+/// above the largest spacing). Runs in O(triangles × band voxels + grid voxels).
 /// @throws ido::InvalidInput if the grid is empty, the mesh has no triangles, an index is
 /// out of range, or distance_triangles has the wrong size.
 [[nodiscard]] image::Volume<float> signed_distance(const geometry::TriangleMesh& surface,
