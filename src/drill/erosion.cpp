@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <span>
 
 #include "ido/core/error.h"
 
@@ -251,7 +252,8 @@ Eroder::Enter Eroder::enter(TetHierarchy& h, const NodeRef& node, std::uint32_t 
       stats.rate_limited = true;
       return Enter::Abort;
     }
-    const NodeRef top = h.erase(node);  // the topmost ancestor merged into an erased leaf
+    // The frames below are the node's ancestors: their words give the path.
+    const NodeRef top = h.erase(node, std::span<const std::uint32_t>(m_frame_word.data(), node.depth));
     stats.removed_volume_mm3 += material;
     ++stats.nodes_removed;
     // Ancestors merged into erased leaves change what lies across their faces too.
@@ -275,6 +277,7 @@ Eroder::Enter Eroder::enter(TetHierarchy& h, const NodeRef& node, std::uint32_t 
     mark(node, face_mask);
   }
   m_stack.push_back(Frame{node, word, x, root_face, static_cast<std::int8_t>(finest), 0, refined_here, face_mask});
+  m_frame_word[node.depth] = word;
   make_children(x, m_centre, m_radius, erased_children(h, word), m_children[node.depth]);
   return Enter::Pushed;
 }
@@ -379,6 +382,7 @@ ErosionStats Eroder::run(TetHierarchy& hierarchy, std::size_t max_node_visits) {
     for (auto& f : m_stack) {
       f.x = hierarchy.world_vertices(f.node);
       m_face_mask[f.node.depth] = f.face_mask;
+      m_frame_word[f.node.depth] = f.word;
       make_children(f.x, m_centre, m_radius, erased_children(hierarchy, f.word), m_children[f.node.depth]);
     }
   }

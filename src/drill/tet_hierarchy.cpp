@@ -273,6 +273,23 @@ NodeRef TetHierarchy::erase(const NodeRef& node) {
     w = &block(*w)[static_cast<std::size_t>(node.slot(level))];
     path[static_cast<std::size_t>(level)] = w;
   }
+  return erase_path(node, path);
+}
+
+NodeRef TetHierarchy::erase(const NodeRef& node, std::span<const std::uint32_t> ancestor_words) {
+  if (ancestor_words.size() < node.depth) return erase(node);
+  std::array<std::uint32_t*, kMaxDepth + 1> path{};
+  path[0] = &m_root_word[node.root];
+  for (int level = 1; level <= node.depth; ++level)
+    path[static_cast<std::size_t>(level)] =
+        &block(ancestor_words[static_cast<std::size_t>(level - 1)])[static_cast<std::size_t>(node.slot(level))];
+  return erase_path(node, path);
+}
+
+// Erases the node whose word path[node.depth] points to (path[d]: the word of its ancestor at
+// depth d) and merges erased sibling blocks upward.
+NodeRef TetHierarchy::erase_path(const NodeRef& node, std::array<std::uint32_t*, kMaxDepth + 1>& path) {
+  std::uint32_t* w = path[node.depth];
   free_subtree(*w);
   *w = kErased;
   // Merge fully erased sibling blocks upward.

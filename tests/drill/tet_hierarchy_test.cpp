@@ -300,6 +300,50 @@ TEST(TetHierarchy, BlocksSpanningSeveralPagesKeepTheirWordsThroughErasureReuseAn
   EXPECT_TRUE(test::rel_near(h.material_volume(), 1000.0 - h.root_volume(11), 1e-12));
 }
 
+TEST(TetHierarchy, EraseWithAncestorWordsEqualsEraseFromTheRoot) {
+  // Two copies refined alike; the sibling groups of random leaves erased in one through
+  // erase(node) and in the other through erase(node, ancestor words read top-down): same
+  // merged nodes, same trees.
+  TetHierarchy a(make_cube12(10.0));
+  for (std::uint32_t r = 0; r < 12; ++r) refine_all(a, r, 3);
+  TetHierarchy b = a;
+  std::mt19937 rng(11);
+  std::size_t merges = 0, erased = 0;
+  auto erase_both = [&](const NodeRef& n) {
+    std::vector<std::uint32_t> words;
+    std::uint32_t w = b.root_word(n.root);
+    for (int d = 0; d < n.depth; ++d) {
+      words.push_back(w);
+      w = b.child_word(w, n.slot(d + 1));
+    }
+    const NodeRef ta = a.erase(n);
+    const NodeRef tb = b.erase(n, words);
+    ASSERT_EQ(ta, tb);
+    ++erased;
+    if (ta.depth < n.depth) ++merges;
+  };
+  for (int i = 0; i < 300; ++i) {
+    const auto r = static_cast<std::uint32_t>(rng() % 12);
+    std::vector<NodeRef> full;
+    a.for_each_leaf(r, [&](const NodeRef& n, NodeState s) {
+      if (s == NodeState::Full && n.depth > 0) full.push_back(n);
+    });
+    if (full.empty()) continue;
+    const NodeRef p = full[rng() % full.size()].parent();
+    for (int s = 0; s < 8; ++s)
+      if (a.state(p.child(s)) == NodeState::Full && rng() % 8 != 0) erase_both(p.child(s));
+  }
+  EXPECT_GT(erased, 1000U);
+  EXPECT_GT(merges, 50U);
+  EXPECT_EQ(a.live_blocks(), b.live_blocks());
+  for (std::uint32_t r = 0; r < 12; ++r) {
+    std::vector<std::pair<NodeRef, NodeState>> la, lb;
+    a.for_each_leaf(r, [&](const NodeRef& n, NodeState s) { la.emplace_back(n, s); });
+    b.for_each_leaf(r, [&](const NodeRef& n, NodeState s) { lb.emplace_back(n, s); });
+    ASSERT_EQ(la, lb) << "root " << r;
+  }
+}
+
 TEST(TetHierarchy, LeafVolumesSumToRootAfterDeepRefinement) {
   TetHierarchy h(make_cube(2.0));
   std::mt19937 rng(5);

@@ -162,6 +162,7 @@ class Eroder {
   std::vector<std::uint32_t> m_slot;  // root → index in m_changed
   std::array<std::uint8_t, kMaxDepth + 1> m_face_mask{};  // root faces touched per level of the current path
   std::array<detail::ErosionChildren, kMaxDepth + 1> m_children;  // children of the frame at each depth
+  std::array<std::uint32_t, kMaxDepth + 1> m_frame_word{};  // storage word of the frame at each depth
 };
 
 }  // namespace ido::drill

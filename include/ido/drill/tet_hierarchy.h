@@ -139,6 +139,11 @@ class TetHierarchy {
   /// the topmost node that became an erased leaf (@p node itself when nothing merged, or
   /// when it lies below a leaf and nothing was done).
   NodeRef erase(const NodeRef& node);
+  /// As erase(node) for a node below internal ancestors whose storage words the caller
+  /// holds (a top-down traversal): @p ancestor_words[d] is the word of the node's ancestor
+  /// at depth d, for every d < node.depth (precondition: each is that ancestor's current
+  /// word, internal), so the path is not walked down from the root.
+  NodeRef erase(const NodeRef& node, std::span<const std::uint32_t> ancestor_words);
   /// Undoes a refinement that removed nothing: an internal node whose 8 children are all
   /// full leaves becomes a full leaf again. Returns true if it did.
   bool coarsen(const NodeRef& node);
@@ -243,6 +248,7 @@ class TetHierarchy {
   std::uint32_t* word_of(const NodeRef& node) noexcept;
   [[nodiscard]] std::uint32_t word_at(const NodeRef& node) const noexcept;
   std::uint32_t allocate_block(std::uint32_t fill);
+  NodeRef erase_path(const NodeRef& node, std::array<std::uint32_t*, kMaxDepth + 1>& path);
   void free_subtree(std::uint32_t word);
   void free_block(std::uint32_t b);
   void update_root_geometry();
