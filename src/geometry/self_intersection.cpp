@@ -627,7 +627,6 @@ Pairs find_pairs(const TriangleMesh& mesh, const SelfIntersectionOptions& option
 
 }  // namespace
 
-
 std::vector<std::pair<std::int32_t, std::int32_t>> self_intersections(
     const TriangleMesh& mesh, const SelfIntersectionOptions& options) {
   return find_pairs(mesh, options, false);
