@@ -68,7 +68,8 @@ double first_transition_limit(const image::Volume<float>& smoothed, const Vec3& 
   const int steps = static_cast<int>(std::ceil(search_mm / step_mm));
   const double ref = sg * model.reference;
   const double lo = ref - model.tolerance, hi = ref + model.tolerance;
-  std::vector<double> I(static_cast<std::size_t>(2 * steps + 1));
+  thread_local std::vector<double> I;  // the profile; kept per thread (called per vertex and step)
+  I.resize(static_cast<std::size_t>(2 * steps + 1));
   for (int s = -steps; s <= steps; ++s) I[std::size_t(s + steps)] = sg * smoothed.sample(p + normal * (s * step_mm));
   auto t_of = [&](std::size_t k) { return (double(k) - steps) * step_mm; };
   std::size_t k = 0;
@@ -152,20 +153,28 @@ std::optional<double> edge_offset_along_normal(const image::Volume<float>& smoot
   // Levels are searched search_mm + window_mm away from the bracket.
   const double tc = 0.5 * (first_t + last_t);
   // The levels are read a window beyond the search, where a blurred step has levelled off.
+  // The walk to the crossing below reads the same offsets tc ± s·step (tc + (−x) rounds as
+  // tc − x), so the departures read here are kept for it.
   double d_in = INFINITY, d_out = -INFINITY;
   const int reach = steps + static_cast<int>(std::ceil(w / step_mm));
+  thread_local std::vector<double> inward, outward;  // departure at tc − s·step, tc + s·step
+  inward.resize(std::size_t(reach) + 1);
+  outward.resize(std::size_t(reach) + 1);
   for (int s = 0; s <= reach; ++s) {
-    d_in = std::min(d_in, depart(tc - s * step_mm));
-    d_out = std::max(d_out, depart(tc + s * step_mm));
+    inward[std::size_t(s)] = depart(tc - s * step_mm);
+    outward[std::size_t(s)] = s == 0 ? inward[0] : depart(tc + s * step_mm);
+    d_in = std::min(d_in, inward[std::size_t(s)]);
+    d_out = std::max(d_out, outward[std::size_t(s)]);
   }
   const double half = 0.5 * (d_in + d_out);
   double wall = tc;
   {
-    double prev_t = tc, prev_d = depart(tc);
+    double prev_t = tc, prev_d = inward[0];
     const double dir = prev_d > half ? -1.0 : 1.0;  // walk towards the crossing
+    const std::vector<double>& kept = dir < 0 ? inward : outward;
     for (int s = 1; s <= 2 * steps; ++s) {
       const double t = tc + dir * s * step_mm;
-      const double d = depart(t);
+      const double d = s <= reach ? kept[std::size_t(s)] : depart(t);
       if ((d - half) * (prev_d - half) <= 0.0) {
         const double f = prev_d != d ? (half - prev_d) / (d - prev_d) : 0.5;
         wall = prev_t + f * (t - prev_t);
@@ -247,7 +256,8 @@ std::optional<PlateauFit> PlateauProfileFitter::fit(const std::vector<double>& s
   if (samples.size() != m_samples || m_pairs.empty()) return std::nullopt;
   // S_j = Σ_k Φ((t_k − x_j)/σ) I_k; the right-hand side of every pair is made of these.
   const std::size_t nc = m_candidates.size();
-  std::vector<double> s(nc, 0.0);
+  thread_local std::vector<double> s, s_outer;  // projections, kept per thread
+  s.assign(nc, 0.0);
   double total = 0, squares = 0;
   for (std::size_t k = 0; k < m_samples; ++k) {
     total += samples[k];
@@ -262,7 +272,7 @@ std::optional<PlateauFit> PlateauProfileFitter::fit(const std::vector<double>& s
     }
   };
   project(m_cdf, s);
-  std::vector<double> s_outer;
+  s_outer.clear();
   if (!m_cdf_outer.empty()) {
     s_outer.resize(nc);
     project(m_cdf_outer, s_outer);
@@ -295,7 +305,8 @@ std::optional<PlateauFit> PlateauProfileFitter::fit(const std::vector<double>& s
 
 std::optional<double> plateau_wall_offset(const image::Volume<float>& smoothed, const Vec3& p, const Vec3& normal,
                                           const IntensityModel& model, const PlateauProfileFitter& fitter) {
-  std::vector<double> samples(fitter.sample_count());
+  thread_local std::vector<double> samples;  // kept per thread (called per vertex and step)
+  samples.resize(fitter.sample_count());
   for (std::size_t k = 0; k < samples.size(); ++k) samples[k] = smoothed.sample(p + normal * fitter.sample_offset_mm(k));
   const auto f = fitter.fit(samples);
   if (!f) return std::nullopt;
@@ -322,7 +333,7 @@ std::optional<double> ThinGapWallModel::wall_offset(const image::Volume<float>& 
                                                     int background_side, double neighbour_mm) const {
   if (background_side == 0) return std::nullopt;
   std::optional<PlateauFit> f;
-  std::vector<double> samples;
+  thread_local std::vector<double> samples;  // kept per thread (called per vertex and step)
   for (const PlateauProfileFitter& fitter : m_fitters) {
     samples.resize(fitter.sample_count());
     for (std::size_t k = 0; k < samples.size(); ++k)
