@@ -196,7 +196,7 @@ std::int64_t SurfaceRemesher::collapse_short_edges(double min_length_mm, double 
     }
   }
   std::int64_t count = 0;
-  std::vector<std::int32_t> na, nb, common;
+  std::vector<std::int32_t> na, nb, common, nc;
   while (!queue.empty() && m_alive_vertices > 4) {
     const auto [l2, key] = queue.top();
     queue.pop();
@@ -244,7 +244,6 @@ std::int64_t SurfaceRemesher::collapse_short_edges(double min_length_mm, double 
     }
     if (!ok) continue;
     // Valence guard: the two opposite vertices lose one neighbour each; keep them ≥ 3.
-    std::vector<std::int32_t> nc;
     bool small_valence = false;
     for (std::int32_t c : common) {
       Impl::neighbours(*this, c, nc);
@@ -283,6 +282,10 @@ std::int64_t SurfaceRemesher::flip_edges() {
       const Tri tr = m_triangles[t0];
       const std::int32_t a = tr[k], b = tr[(k + 1) % 3];
       if (a > b) continue;
+      // The valence test below changes each of the four |v − 6| terms by ±1 and needs a net
+      // fall of at least 2, so at least one end of the edge must have valence ≥ 7: skip the
+      // lookups otherwise (the same decision, made earlier).
+      if (valence(a) < 7 && valence(b) < 7) continue;
       std::int32_t ts[2];
       if (Impl::edge_triangles(*this, a, b, ts) != 2) continue;
       std::int32_t t1 = ts[0], t2 = ts[1];
