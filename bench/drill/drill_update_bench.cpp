@@ -151,7 +151,8 @@ void BM_UpdateTime(benchmark::State& state) {
   state.counters["leaf_edge_mm"] = leaf_edge(depth);
 }
 // Unlimited erosion with whole-root v_lists (chunk level 0: the previous algorithm's work,
-// in the new code), unlimited erosion with chunked v_lists, and the default budget.
+// in the new code), unlimited erosion with chunked v_lists, the default budgets, half and
+// one and a half times them.
 BENCHMARK(BM_UpdateTime)
     ->Args({4, 0, 0, 0})
     ->Args({5, 0, 0, 0})
@@ -161,6 +162,7 @@ BENCHMARK(BM_UpdateTime)
     ->Args({6, 0, 3, 0})
     ->ArgsProduct({{4, 5, 6, 7, 8}, {6000}, {3}, {8000}})
     ->ArgsProduct({{5, 6, 7}, {3000}, {3}, {4000}})
+    ->ArgsProduct({{6, 7, 8}, {9000}, {3}, {12000}})
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond);
 

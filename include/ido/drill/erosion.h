@@ -39,7 +39,7 @@ struct ErosionOptions {
   /// the interrupted traversal and the queued burr positions carry over to the next pass,
   /// so one pass costs O(budget) whatever the depth while the removed volume still
   /// converges (Eroder::finish completes the backlog). 0 = unlimited. Default 6000 visits
-  /// (≈ 0.3 ms on the reference machine, bench/results/drill.md).
+  /// (≈ 0.2 ms on the reference machine, bench/results/drill.md).
   std::size_t max_node_visits = 6000;
   /// While work is carried over, a newly queued burr position replaces the last queued
   /// (not yet started) one when the position before that is within backlog_spacing ×
