@@ -278,6 +278,9 @@ NodeRef TetHierarchy::erase(const NodeRef& node) {
 
 NodeRef TetHierarchy::erase(const NodeRef& node, std::span<const std::uint32_t> ancestor_words) {
   if (ancestor_words.size() < node.depth) return erase(node);
+  for (std::size_t d = 0; d < node.depth; ++d)
+    if (ancestor_words[d] == kFull || ancestor_words[d] == kErased || ancestor_words[d] >= m_block_count)
+      return erase(node);  // not internal words: walk from the root instead
   std::array<std::uint32_t*, kMaxDepth + 1> path{};
   path[0] = &m_root_word[node.root];
   for (int level = 1; level <= node.depth; ++level)

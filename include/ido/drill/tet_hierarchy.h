@@ -142,7 +142,8 @@ class TetHierarchy {
   /// As erase(node) for a node below internal ancestors whose storage words the caller
   /// holds (a top-down traversal): @p ancestor_words[d] is the word of the node's ancestor
   /// at depth d, for every d < node.depth (precondition: each is that ancestor's current
-  /// word, internal), so the path is not walked down from the root.
+  /// word, internal), so the path is not walked down from the root. Falls back to
+  /// erase(node) when a given word is not a block index (full, erased or out of range).
   NodeRef erase(const NodeRef& node, std::span<const std::uint32_t> ancestor_words);
   /// Undoes a refinement that removed nothing: an internal node whose 8 children are all
   /// full leaves becomes a full leaf again. Returns true if it did.
@@ -206,7 +207,8 @@ class TetHierarchy {
 
   /// Live nodes: every root plus 8 per child block in use.
   [[nodiscard]] std::size_t node_count() const noexcept { return m_roots.size() + 8 * m_live_blocks; }
-  /// Bytes of node storage: one word per root plus every allocated block (free ones too).
+  /// Bytes of node storage: one word per root plus every block handed out (free ones too;
+  /// not the unused rest of the last page).
   [[nodiscard]] std::size_t node_storage_bytes() const noexcept {
     return m_root_word.size() * sizeof(std::uint32_t) + m_block_count * sizeof(Block);
   }
