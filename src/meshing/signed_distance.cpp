@@ -113,18 +113,22 @@ image::Volume<float> signed_distance(const geometry::TriangleMesh& surface,
   // safe when d(p) + d(q) > L. Grid points joined by safe steps form components that take the
   // sign of one winding-number evaluation each; only points with no safe step (on or very
   // near the surface) evaluate it themselves. d here is a lower bound of the distance to every
-  // triangle: the computed distance (to the counted triangles, at most band_mm), capped at
-  // 1.01 × the largest spacing, and 0 within that reach of an uncounted triangle's box.
+  // triangle: the least of the computed distance (to the counted triangles, at most band_mm),
+  // 1.01 × the largest spacing, and the distance to the uncounted triangles near them.
   const geometry::WindingNumber winding(surface, {.beta = options.winding_beta});
   const auto total = static_cast<std::int64_t>(dist.size());
   const double reach = 1.01 * grid.spacing().maxCoeff();
-  std::vector<std::uint8_t> near_uncounted(dist.size(), 0);
+  // Distance to the uncounted triangles within their boxes padded by the reach (the reach
+  // elsewhere); empty when every triangle counts.
+  std::vector<float> uncounted;
   if (!options.distance_triangles.empty()) {
     const Vec3 pad_reach = (Vec3::Constant(reach).array() / grid.spacing().array()).matrix();
     for (std::size_t t = 0; t < surface.triangles.size(); ++t) {
       if (options.distance_triangles[t]) continue;
+      if (uncounted.empty()) uncounted.assign(dist.size(), static_cast<float>(reach));
+      const Tri& tr = surface.triangles[t];
       Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
-      for (std::int32_t v : surface.triangles[t]) {
+      for (std::int32_t v : tr) {
         const Vec3 idx = grid.world_to_index(surface.vertices[v]);
         lo = lo.cwiseMin(idx);
         hi = hi.cwiseMax(idx);
@@ -135,12 +139,20 @@ image::Volume<float> signed_distance(const geometry::TriangleMesh& surface,
         bl[a] = std::max<std::int64_t>(0, static_cast<std::int64_t>(std::ceil(lo[a] - pad)));
         bh[a] = std::min<std::int64_t>(n[a] - 1, static_cast<std::int64_t>(std::floor(hi[a] + pad)));
       }
+      const Vec3 &a = surface.vertices[tr[0]], &b = surface.vertices[tr[1]], &c = surface.vertices[tr[2]];
       for (std::int64_t k = bl[2]; k <= bh[2]; ++k)
         for (std::int64_t j = bl[1]; j <= bh[1]; ++j)
-          for (std::int64_t i = bl[0]; i <= bh[0]; ++i) near_uncounted[out.linear_index(i, j, k)] = 1;
+          for (std::int64_t i = bl[0]; i <= bh[0]; ++i) {
+            const Vec3 p = grid.index_to_world(Vec3(double(i), double(j), double(k)));
+            float& slot = uncounted[out.linear_index(i, j, k)];
+            slot = std::min(slot, static_cast<float>((closest_point_on_triangle_mm(p, a, b, c) - p).norm()));
+          }
     }
   }
-  auto bound = [&](std::size_t v) { return near_uncounted[v] ? 0.0 : std::min(double(std::abs(dist[v])), reach); };
+  auto bound = [&](std::size_t v) {
+    const double d = std::min(double(std::abs(dist[v])), reach);
+    return uncounted.empty() ? d : std::min(d, double(uncounted[v]));
+  };
   // A step along axis a is safe when the bounds add up to more than its length (with a
   // margin far above the float rounding of the distances).
   const std::int64_t stride[3] = {1, n[0], n[0] * n[1]};
