@@ -103,6 +103,14 @@ SurfaceRemesher::SurfaceRemesher(const geometry::TriangleMesh& mesh, std::vector
   m_triangle_alive.assign(m_triangles.size(), 1);
   m_vertex_triangles.assign(m_vertices.size(), {});
   m_alive_vertices = nv;
+  {
+    // One allocation per incidence list (with room for a few splits), not a doubling series.
+    std::vector<std::int32_t> valence(m_vertices.size(), 0);
+    for (const Tri& tr : m_triangles)
+      for (std::int32_t v : tr)
+        if (v >= 0 && v < nv) ++valence[std::size_t(v)];
+    for (std::size_t v = 0; v < m_vertices.size(); ++v) m_vertex_triangles[v].reserve(std::size_t(valence[v]) + 2);
+  }
   for (std::size_t t = 0; t < m_triangles.size(); ++t) {
     const Tri& tr = m_triangles[t];
     for (int k = 0; k < 3; ++k) {
