@@ -7,6 +7,7 @@
 #include <chrono>
 #include <ctime>
 #include <cmath>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -165,6 +166,184 @@ BENCHMARK(BM_UpdateTime)
     ->ArgsProduct({{6, 7, 8}, {9000}, {3}, {12000}})
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond);
+
+// Squared distance (mm²) from p to the triangle (a, b, c) (Ericson, Real-Time Collision
+// Detection, 5.1.5).
+double point_triangle_distance2(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0.0 && d2 <= 0.0) return ap.squaredNorm();
+  const Vec3 bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0.0 && d4 <= d3) return bp.squaredNorm();
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return (ap - ab * (d1 / (d1 - d3))).squaredNorm();
+  const Vec3 cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0.0 && d5 <= d6) return cp.squaredNorm();
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return (ap - ac * (d2 / (d2 - d6))).squaredNorm();
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0)
+    return (bp - (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)))).squaredNorm();
+  const double denom = 1.0 / (va + vb + vc);
+  return (ap - ab * (vb * denom) - ac * (vc * denom)).squaredNorm();
+}
+
+// True when the sphere (c, r) and the tetrahedron x share a point (distance from c to the
+// solid tetrahedron ≤ r).
+bool sphere_touches_tet(const std::array<Vec3, 4>& x, const Vec3& c, double r) {
+  const double vol = signed_volume(x[0], x[1], x[2], x[3]);
+  bool inside = true;
+  static constexpr int kFace[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
+  for (int f = 0; f < 4 && inside; ++f) {
+    std::array<Vec3, 4> y = x;
+    y[static_cast<std::size_t>(f)] = c;
+    inside = signed_volume(y[0], y[1], y[2], y[3]) * vol >= 0.0;
+  }
+  if (inside) return true;
+  for (const auto& f : kFace)
+    if (point_triangle_distance2(c, x[static_cast<std::size_t>(f[0])], x[static_cast<std::size_t>(f[1])],
+                                 x[static_cast<std::size_t>(f[2])]) <= r * r)
+      return true;
+  return false;
+}
+
+// After the trace of BM_UpdateTime (default budgets, backlog finished), what the node
+// storage holds: sibling blocks by kind — (a) 8 full leaves, (b) 8 leaves, some erased,
+// (c) at least one internal child, (d) 8 erased leaves (must be 0: they merge) — and the
+// full leaves below a root that no burr position touched (exact sphere–tetrahedron test
+// against every queued sub-step sphere): material refined only because its parent
+// straddled the burr. Also the size of two denser encodings of the same tree, computed
+// from the counts (not implemented): 2-bit child states + one 32-bit first-child-block
+// index per block (6 bytes per block; needs the internal children's blocks contiguous),
+// the same with blocks of 8 leaves held as a one-byte mask, and 2 bits per node in
+// breadth-first order (static, no O(1) update). Arg: depth.
+void BM_BlockCensus(benchmark::State& state) {
+  const int depth = static_cast<int>(state.range(0));
+  std::size_t all_full = 0, mixed = 0, with_internal = 0, all_erased = 0, full_leaves = 0, full_untouched = 0,
+              erased_leaves = 0, internal_nodes = 0, full_in_mixed = 0, erased_in_mixed = 0, untouched_all_full = 0;
+  std::size_t nodes = 0, storage = 0, roots = 0, live_blocks = 0;
+  double bytes = 0.0;
+  for (auto _ : state) {
+    TetHierarchy h(make_block(kBlock, kBlockCell));
+    BoundarySurface surface(h, {.chunk_level = 3});
+    Eroder eroder({.force_threshold_n = 0.0, .removal_rate_mm3_per_s = 0.0, .max_depth = depth, .max_node_visits = 6000});
+    std::vector<Vec3> centres;
+    Vec3 last = trace(0);
+    for (int i = 0; i < kUpdates || eroder.has_pending() || surface.has_pending(); ++i) {
+      if (i < kUpdates) {
+        const Vec3 c = trace(i);
+        const int n = std::max(1, static_cast<int>(std::ceil((c - last).norm() / (0.25 * kRadius))));
+        for (int k = 1; k <= n; ++k) {
+          centres.push_back(last + (c - last) * (double(k) / n));
+          eroder.enqueue(centres.back(), kRadius, 1.0, 1e-3 / n);
+        }
+        last = c;
+      }
+      (void)eroder.run(h, 6000);
+      surface.update(h, eroder.changed_nodes(), 8000);
+      eroder.clear_changed_roots();
+    }
+    // Burr centres bucketed in 1 mm cells for the touch test.
+    const double cell = 1.0;
+    auto key = [&](const Vec3& p) {
+      return std::array<int, 3>{static_cast<int>(std::floor(p.x() / cell)), static_cast<int>(std::floor(p.y() / cell)),
+                                static_cast<int>(std::floor(p.z() / cell))};
+    };
+    std::map<std::array<int, 3>, std::vector<Vec3>> buckets;
+    for (const auto& c : centres) buckets[key(c)].push_back(c);
+    auto touched = [&](const NodeRef& n) {
+      const auto x = h.world_vertices(n);
+      const Vec3 centroid = 0.25 * (x[0] + x[1] + x[2] + x[3]);
+      double rad = 0.0;
+      for (const auto& v : x) rad = std::max(rad, (v - centroid).norm());
+      const double reach = kRadius + rad;
+      const auto lo = key(centroid - Vec3::Constant(reach)), hi = key(centroid + Vec3::Constant(reach));
+      for (int i = lo[0]; i <= hi[0]; ++i)
+        for (int j = lo[1]; j <= hi[1]; ++j)
+          for (int k = lo[2]; k <= hi[2]; ++k) {
+            const auto it = buckets.find({i, j, k});
+            if (it == buckets.end()) continue;
+            for (const auto& c : it->second)
+              if ((c - centroid).squaredNorm() <= reach * reach && sphere_touches_tet(x, c, kRadius)) return true;
+          }
+      return false;
+    };
+    all_full = mixed = with_internal = all_erased = full_leaves = full_untouched = erased_leaves = internal_nodes = 0;
+    full_in_mixed = erased_in_mixed = untouched_all_full = 0;
+    for (std::size_t r = 0; r < h.root_count(); ++r) {
+      struct Item {
+        NodeRef node;
+        std::uint32_t word;
+      };
+      std::vector<Item> stack{{NodeRef{static_cast<std::uint32_t>(r), 0, 0}, h.root_word(r)}};
+      while (!stack.empty()) {
+        const Item it = stack.back();
+        stack.pop_back();
+        const NodeState s = TetHierarchy::state_of_word(it.word);
+        if (s == NodeState::Full) {
+          ++full_leaves;
+          if (it.node.depth > 0 && !touched(it.node)) ++full_untouched;
+          continue;
+        }
+        if (s == NodeState::Erased) {
+          ++erased_leaves;
+          continue;
+        }
+        ++internal_nodes;
+        int full = 0, erased = 0;
+        for (int c = 0; c < 8; ++c) {
+          const std::uint32_t w = h.child_word(it.word, c);
+          full += w == TetHierarchy::kFull ? 1 : 0;
+          erased += w == TetHierarchy::kErased ? 1 : 0;
+          stack.push_back({it.node.child(c), w});
+        }
+        if (full == 8) {
+          ++all_full;
+          bool any = false;
+          for (int c = 0; c < 8 && !any; ++c) any = touched(it.node.child(c));
+          if (!any) ++untouched_all_full;
+        } else if (erased == 8) {
+          ++all_erased;
+        } else if (full + erased == 8) {
+          ++mixed;
+          full_in_mixed += static_cast<std::size_t>(full);
+          erased_in_mixed += static_cast<std::size_t>(erased);
+        } else {
+          ++with_internal;
+        }
+      }
+    }
+    nodes = h.node_count();
+    storage = h.node_storage_bytes();
+    roots = h.root_count();
+    live_blocks = h.live_blocks();
+    bytes = h.bytes_per_node();
+  }
+  state.counters["blocks_all_full"] = static_cast<double>(all_full);
+  state.counters["blocks_all_full_untouched"] = static_cast<double>(untouched_all_full);
+  state.counters["blocks_mixed_leaves"] = static_cast<double>(mixed);
+  state.counters["blocks_with_internal"] = static_cast<double>(with_internal);
+  state.counters["blocks_all_erased"] = static_cast<double>(all_erased);
+  state.counters["live_blocks"] = static_cast<double>(live_blocks);
+  state.counters["full_in_mixed"] = static_cast<double>(full_in_mixed);
+  state.counters["erased_in_mixed"] = static_cast<double>(erased_in_mixed);
+  state.counters["full_leaves"] = static_cast<double>(full_leaves);
+  state.counters["full_leaves_untouched"] = static_cast<double>(full_untouched);
+  state.counters["erased_leaves"] = static_cast<double>(erased_leaves);
+  state.counters["internal_nodes"] = static_cast<double>(internal_nodes);
+  state.counters["nodes"] = static_cast<double>(nodes);
+  state.counters["bytes_per_node"] = bytes;
+  state.counters["node_storage_kB"] = static_cast<double>(storage) / 1024.0;
+  state.counters["est_6B_per_block_kB"] = static_cast<double>(4 * roots + 6 * live_blocks) / 1024.0;
+  // 2-bit codes full / erased / internal with 8 leaf children / other internal; a node of
+  // the third kind is one byte (its children's full/erased mask), of the fourth 6 bytes
+  // (its children's codes + the index of their records): allocator slack not counted.
+  state.counters["est_leaf_mask_kB"] = static_cast<double>(4 * roots + mixed + 6 * with_internal) / 1024.0;
+  state.counters["est_2bit_per_node_kB"] = static_cast<double>(nodes) / 4.0 / 1024.0;
+}
+BENCHMARK(BM_BlockCensus)->DenseRange(4, 8)->Iterations(1)->Unit(benchmark::kMillisecond);
 
 // The haptic loop over a scripted trace through the three threads. Args: seconds, hybrid
 // wait spin (µs; 0 = plain sleep_until), SCHED_FIFO priority of the haptic thread (0 =
