@@ -18,7 +18,6 @@
 #include "ido/meshing/remesh.h"
 #include "ido/meshing/signed_distance.h"
 #include "ido/segment/topology_repair.h"
-#include "clamped_sample.h"
 
 namespace ido::segment {
 
@@ -228,7 +227,7 @@ struct Balloon::State {
             normal_mm[i] = -step;
             return;
           }
-          const double I = detail::sample_clamped(smoothed, x[i]);
+          const double I = smoothed.sample(x[i]);
           if (edge_stage) {
             auto t = edge_offset_along_normal(smoothed, x[i], nrm, model, search, 0.2 * h, min_rise, h);
             if (t && model.accept_brighter) {
@@ -244,7 +243,7 @@ struct Balloon::State {
               // plateau fit up to the neighbour's rim.
               std::optional<double> w;
               if (limited < *t && !thin_gap.empty() &&
-                  (detail::sample_clamped(smoothed, x[i] + nrm * (*t + h)) - model.reference) * background_side < -model.tolerance)
+                  (smoothed.sample(x[i] + nrm * (*t + h)) - model.reference) * background_side < -model.tolerance)
                 w = thin_gap[blur_level(nrm)].wall_offset(smoothed, x[i], nrm, model, background_side, *t);
               t = w && *w <= *t ? *w : limited;
             }
@@ -267,8 +266,8 @@ struct Balloon::State {
             // tolerance and k, was low.
             const double slope =
                 model.accept_brighter
-                    ? std::max(0.0, (detail::sample_clamped(smoothed, x[i] - nrm * h) - detail::sample_clamped(smoothed, x[i] + nrm * h)) / (2.0 * h))
-                    : detail::sample_clamped(gradient_mm, x[i]);
+                    ? std::max(0.0, (smoothed.sample(x[i] - nrm * h) - smoothed.sample(x[i] + nrm * h)) / (2.0 * h))
+                    : gradient_mm.sample(x[i]);
             const double g = slope / edge_k;
             sp /= 1.0 + g * g;
           }

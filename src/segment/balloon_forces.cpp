@@ -5,7 +5,6 @@
 #include <cmath>
 #include <vector>
 
-#include "clamped_sample.h"
 #include "ido/core/error.h"
 
 namespace ido::segment {
@@ -43,7 +42,7 @@ int first_exit_direction(const image::Volume<float>& smoothed, const Vec3& p, co
   const double lo = model.reference - model.tolerance, hi = model.reference + model.tolerance;
   bool inside = false;
   for (int s = -steps; s <= steps; ++s) {
-    const double v = detail::sample_clamped(smoothed, p + normal * (s * step_mm));
+    const double v = smoothed.sample(p + normal * (s * step_mm));
     const bool accepted = v >= lo && v <= hi;
     if (accepted) inside = true;
     else if (inside) return v > hi ? 1 : -1;
@@ -71,7 +70,7 @@ double first_transition_limit(const image::Volume<float>& smoothed, const Vec3& 
   const double lo = ref - model.tolerance, hi = ref + model.tolerance;
   thread_local std::vector<double> I;  // the profile; kept per thread (called per vertex and step)
   I.resize(static_cast<std::size_t>(2 * steps + 1));
-  for (int s = -steps; s <= steps; ++s) I[std::size_t(s + steps)] = sg * detail::sample_clamped(smoothed, p + normal * (s * step_mm));
+  for (int s = -steps; s <= steps; ++s) I[std::size_t(s + steps)] = sg * smoothed.sample(p + normal * (s * step_mm));
   auto t_of = [&](std::size_t k) { return (double(k) - steps) * step_mm; };
   std::size_t k = 0;
   while (k < I.size() && !(I[k] >= lo && I[k] <= hi)) ++k;  // innermost accepted sample
@@ -132,7 +131,7 @@ std::optional<double> edge_offset_along_normal(const image::Volume<float>& smoot
   // or, when brighter tissue also belongs to the organ (bone), minus the intensity, so the
   // wall is the outer fall of intensity whatever lies between marrow and cortex.
   auto depart = [&](double t) {
-    const double I = detail::sample_clamped(smoothed, p + normal * t);
+    const double I = smoothed.sample(p + normal * t);
     return model.accept_brighter ? -I : intensity_departure(I, model);
   };
   double best = -INFINITY, first_t = 0, last_t = 0;
@@ -308,7 +307,7 @@ std::optional<double> plateau_wall_offset(const image::Volume<float>& smoothed, 
                                           const IntensityModel& model, const PlateauProfileFitter& fitter) {
   thread_local std::vector<double> samples;  // kept per thread (called per vertex and step)
   samples.resize(fitter.sample_count());
-  for (std::size_t k = 0; k < samples.size(); ++k) samples[k] = detail::sample_clamped(smoothed, p + normal * fitter.sample_offset_mm(k));
+  for (std::size_t k = 0; k < samples.size(); ++k) samples[k] = smoothed.sample(p + normal * fitter.sample_offset_mm(k));
   const auto f = fitter.fit(samples);
   if (!f) return std::nullopt;
   auto accepted = [&](double level) { return intensity_departure(level, model) <= model.tolerance; };
@@ -338,7 +337,7 @@ std::optional<double> ThinGapWallModel::wall_offset(const image::Volume<float>& 
   for (const PlateauProfileFitter& fitter : m_fitters) {
     samples.resize(fitter.sample_count());
     for (std::size_t k = 0; k < samples.size(); ++k)
-      samples[k] = detail::sample_clamped(smoothed, p + normal * (neighbour_mm + fitter.sample_offset_mm(k)));
+      samples[k] = smoothed.sample(p + normal * (neighbour_mm + fitter.sample_offset_mm(k)));
     const auto g = fitter.fit(samples);
     if (g && (!f || g->rms_residual < f->rms_residual)) f = g;
   }

@@ -2,7 +2,6 @@
 #include "ido/segment/balloon.h"
 
 #include <array>
-#include <bit>
 #include <cmath>
 #include <functional>
 #include <random>
@@ -19,7 +18,6 @@
 #include "ido/segment/intensity_model.h"
 #include "ido/segment/topology_repair.h"
 #include "support/test_support.h"
-#include "../../src/segment/clamped_sample.h"
 
 namespace ido::segment {
 namespace {
@@ -443,34 +441,6 @@ TEST(TopologyRepair, RemesherInputCheckRejectsOpenAndMisorientedMeshes) {
   auto doubled = s;
   doubled.triangles.push_back(s.triangles[0]);
   EXPECT_THROW(meshing::SurfaceRemesher{doubled}, InvalidInput);
-}
-
-// The balloon's sampler (no floor() calls) must return exactly what Volume::sample returns
-// with the clamped boundary — inside, on and beyond the border, on a rotated anisotropic grid
-// and a grid one voxel thick — so the segmentation is the same bit for bit.
-TEST(ClampedSample, SameBitsAsVolumeSample) {
-  std::mt19937 rng(3);
-  std::uniform_real_distribution<double> u(-3.0, 12.0);
-  std::normal_distribution<float> value(100.0f, 40.0f);
-  for (const Index3& size : {Index3{9, 7, 5}, Index3{6, 1, 4}}) {
-    image::Volume<float> v(size, Vec3(0.8, 0.9, 1.4), Vec3(-2.0, 1.0, 0.5));
-    v.set_direction(test::rotation(0.2, 0.4, -0.3));
-    for (float& x : v.data()) x = value(rng);
-    std::int64_t differ = 0;
-    for (int q = 0; q < 20000; ++q) {
-      const Vec3 p(u(rng), u(rng), u(rng));
-      differ += std::bit_cast<std::uint64_t>(detail::sample_clamped(v, p)) != std::bit_cast<std::uint64_t>(v.sample(p));
-    }
-    // Voxel centres and the border exactly.
-    for (std::int64_t k = 0; k < size[2]; ++k)
-      for (std::int64_t i = 0; i < size[0]; ++i) {
-        const Vec3 p = v.index_to_world(Vec3(double(i), double(size[1] - 1), double(k)));
-        differ += std::bit_cast<std::uint64_t>(detail::sample_clamped(v, p)) != std::bit_cast<std::uint64_t>(v.sample(p));
-      }
-    EXPECT_EQ(differ, 0);
-  }
-  EXPECT_EQ(std::bit_cast<std::uint64_t>(detail::sample_clamped(image::Volume<float>{}, Vec3::Zero())),
-            std::bit_cast<std::uint64_t>(image::Volume<float>{}.sample(Vec3::Zero())));
 }
 
 TEST(Balloon, RejectsBadInput) {
