@@ -106,6 +106,14 @@ TEST(Simulator, ScriptedSessionDrillsAndRenderCopyMatches) {
   EXPECT_LE(st.removed_volume_mm3, swept);
 }
 
+// A 2 mm burr that cuts at once, leaves down to depth 3: plunge(0.4) into a 12 mm block drills.
+SimulatorOptions drilling_plunge_options() {
+  SimulatorOptions o;
+  o.tool.burr_radius_mm = 2.0;
+  o.erosion = {.force_threshold_n = 0.05, .removal_rate_mm3_per_s = 0.0, .max_depth = 3};
+  return o;
+}
+
 TEST(Simulator, HybridWaitMarginMustBeShorterThanThePeriod) {
   TetHierarchy h(make_block({12, 12, 12}, 3.0));
   auto device = plunge(0.4);
@@ -118,9 +126,7 @@ TEST(Simulator, HybridWaitMarginMustBeShorterThanThePeriod) {
   for (const double spin : {0.0, 0.9e-3}) {
     TetHierarchy g(make_block({12, 12, 12}, 3.0));
     auto d = plunge(0.4);
-    SimulatorOptions o;
-    o.tool.burr_radius_mm = 2.0;
-    o.erosion = {.force_threshold_n = 0.05, .removal_rate_mm3_per_s = 0.0, .max_depth = 3};
+    SimulatorOptions o = drilling_plunge_options();
     o.haptic_spin_s = spin;
     Simulator sim(g, d, o);
     sim.run(10.0);
@@ -176,9 +182,7 @@ TEST(Simulator, HapticThreadRunsUnderTheSchedulingItReports) {
   for (const int priority : {0, 80}) {
     TetHierarchy g(make_block({12, 12, 12}, 3.0));
     PolicyRecordingDevice device(plunge(0.4));
-    SimulatorOptions o;
-    o.tool.burr_radius_mm = 2.0;
-    o.erosion = {.force_threshold_n = 0.05, .removal_rate_mm3_per_s = 0.0, .max_depth = 3};
+    SimulatorOptions o = drilling_plunge_options();
     o.haptic_realtime_priority = priority;
     Simulator sim(g, device, o);
     sim.run(10.0);
