@@ -117,12 +117,6 @@ inline int plane_side(const Plane& p, const Vec3& d) {
   return (det > bound) - (det < -bound);
 }
 
-/// Both points certified strictly on one side of the plane.
-inline bool same_strict_side(const Plane& p, const Vec3& d, const Vec3& e) {
-  const int s = plane_side(p, d);
-  return s != 0 && s == plane_side(p, e);
-}
-
 /// Sign of orient3d(a, b, c, d) when its floating-point filter certifies it, else 0.
 inline int orient3d_certified(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
   return plane_side(plane_of(a, b, c), d);
