@@ -31,18 +31,32 @@ bool beyond_a_face(const std::array<Vec3, 4>& x, const Vec3& c, double r2, doubl
   return false;
 }
 
-// The per-node tests of one sphere (c, r) on tetrahedron x, without the face planes: whether
-// the sphere misses the bounding sphere of the vertices about the centroid (`beyond`), the
-// squared distance from c to the centroid (`d2`) and which vertices lie in the sphere
-// (`inside`, bit k for vertex k).
+// The bounding-sphere test of one sphere (c, r) on the tetrahedron with vertices a, b, e, f:
+// the squared distance from c to the centroid and whether the sphere misses the vertices'
+// bounding sphere about the centroid.
+struct BoundingTest {
+  double d2;
+  bool beyond;
+};
+inline BoundingTest bounding_test(const Vec3& a, const Vec3& b, const Vec3& e, const Vec3& f, const Vec3& c, double r) {
+  const Vec3 centroid = 0.25 * (a + b + e + f);
+  double rad2 = 0.0;
+  rad2 = std::max(rad2, (a - centroid).squaredNorm());
+  rad2 = std::max(rad2, (b - centroid).squaredNorm());
+  rad2 = std::max(rad2, (e - centroid).squaredNorm());
+  rad2 = std::max(rad2, (f - centroid).squaredNorm());
+  const double reach = r + std::sqrt(rad2);
+  const double d2 = (c - centroid).squaredNorm();
+  return {d2, d2 > reach * reach};
+}
+
+// The per-node tests of one sphere (c, r) on tetrahedron x, without the face planes:
+// bounding_test() and which vertices lie in the sphere (`inside`, bit k for vertex k).
 void node_tests(const std::array<Vec3, 4>& x, const Vec3& c, double r, bool& beyond, double& d2,
                 std::uint8_t& inside) {
-  const Vec3 centroid = 0.25 * (x[0] + x[1] + x[2] + x[3]);
-  double rad2 = 0.0;
-  for (const auto& v : x) rad2 = std::max(rad2, (v - centroid).squaredNorm());
-  const double reach = r + std::sqrt(rad2);
-  d2 = (c - centroid).squaredNorm();
-  beyond = d2 > reach * reach;
+  const BoundingTest b = bounding_test(x[0], x[1], x[2], x[3], c, r);
+  beyond = b.beyond;
+  d2 = b.d2;
   const double r2 = r * r;
   inside = 0;
   for (std::size_t k = 0; k < 4; ++k)
@@ -104,15 +118,11 @@ void make_children(const std::array<Vec3, 4>& p, const Vec3& c, double r, std::u
   for (std::size_t s = 0; s < 8; ++s) {
     if (((skip >> s) & 1U) != 0) continue;
     const auto& pt = cp.point[s];
-    const std::array<const Vec3*, 4> x{&q[pt[0]], &q[pt[1]], &q[pt[2]], &q[pt[3]]};
     std::uint8_t inside = 0;
     for (std::size_t v = 0; v < 4; ++v) inside = static_cast<std::uint8_t>(inside | (((in >> pt[v]) & 1U) << v));
-    const Vec3 centroid = 0.25 * (*x[0] + *x[1] + *x[2] + *x[3]);
-    double rad2 = 0.0;
-    for (const Vec3* v : x) rad2 = std::max(rad2, (*v - centroid).squaredNorm());
-    const double reach = r + std::sqrt(rad2);
-    k.d2[s] = (c - centroid).squaredNorm();
-    k.beyond[s] = k.d2[s] > reach * reach;
+    const BoundingTest b = bounding_test(q[pt[0]], q[pt[1]], q[pt[2]], q[pt[3]], c, r);
+    k.d2[s] = b.d2;
+    k.beyond[s] = b.beyond;
     k.inside[s] = inside;
   }
 }
