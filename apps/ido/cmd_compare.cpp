@@ -28,21 +28,23 @@ struct CompareOptions {
   bool json = false;
 };
 
-/// Reads a label volume: voxels equal to @p label (or ≠ 0 when label < 0) are inside.
-image::Volume<std::uint8_t> read_mask(const std::string& path, int label) {
+/// Reads a volume as a mask: voxels whose value passes @p inside are 1.
+template <class Inside>
+image::Volume<std::uint8_t> read_mask_where(const std::string& path, Inside inside) {
   const auto v = io::read_volume(path);
   auto m = v.like<std::uint8_t>(0);
-  for (std::size_t n = 0; n < v.data().size(); ++n)
-    m.data()[n] = label < 0 ? v.data()[n] != 0.f : v.data()[n] == float(label);
+  for (std::size_t n = 0; n < v.data().size(); ++n) m.data()[n] = inside(v.data()[n]);
   return m;
+}
+
+/// Reads a label volume: voxels equal to @p label (or ≠ 0 when label < 0) are inside.
+image::Volume<std::uint8_t> read_mask(const std::string& path, int label) {
+  return read_mask_where(path, [label](float x) { return label < 0 ? x != 0.f : x == float(label); });
 }
 
 /// Reads a level-set or distance volume: voxels with a value below @p level are inside.
 image::Volume<std::uint8_t> read_level_set_mask(const std::string& path, double level) {
-  const auto v = io::read_volume(path);
-  auto m = v.like<std::uint8_t>(0);
-  for (std::size_t n = 0; n < v.data().size(); ++n) m.data()[n] = static_cast<double>(v.data()[n]) < level;
-  return m;
+  return read_mask_where(path, [level](float x) { return static_cast<double>(x) < level; });
 }
 
 nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
