@@ -14,11 +14,11 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <numeric>
 #include <random>
 
 #include "ido/geometry/primitives.h"
 #include "ido/geometry/self_intersection.h"
+#include "geometry/test_meshes.h"  // tests/: shuffled()
 
 #ifdef IDO_BENCH_WITH_CGAL
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
@@ -62,20 +62,7 @@ TriangleMesh folded_torus() {
 }
 
 /// The folded torus with its vertices and triangles in random order (no index locality).
-TriangleMesh shuffled(TriangleMesh m) {
-  std::mt19937_64 rng(11);
-  std::vector<std::int32_t> new_id(m.vertices.size());
-  std::iota(new_id.begin(), new_id.end(), 0);
-  std::shuffle(new_id.begin(), new_id.end(), rng);
-  std::vector<Vec3> vertices(m.vertices.size());
-  for (std::size_t v = 0; v < m.vertices.size(); ++v) vertices[static_cast<std::size_t>(new_id[v])] = m.vertices[v];
-  m.vertices = std::move(vertices);
-  for (Tri& t : m.triangles) {
-    for (auto& i : t) i = new_id[static_cast<std::size_t>(i)];
-  }
-  std::shuffle(m.triangles.begin(), m.triangles.end(), rng);
-  return m;
-}
+TriangleMesh shuffled(const TriangleMesh& m) { return test::shuffled(m, std::mt19937_64(11)); }
 
 const TriangleMesh& test_mesh(std::int64_t kind) {
   static const std::array<TriangleMesh, 3> meshes{clean_torus(), folded_torus(), shuffled(folded_torus())};

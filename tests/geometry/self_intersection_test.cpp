@@ -42,20 +42,7 @@ void expect_matches_brute_force(const TriangleMesh& m, bool expect_some) {
 }
 
 /// @p m with its vertices and triangles in random order (same surface, no index locality).
-TriangleMesh shuffled(TriangleMesh m, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::vector<std::int32_t> new_id(m.vertices.size());
-  for (std::size_t v = 0; v < new_id.size(); ++v) new_id[v] = static_cast<std::int32_t>(v);
-  std::shuffle(new_id.begin(), new_id.end(), rng);
-  std::vector<Vec3> vertices(m.vertices.size());
-  for (std::size_t v = 0; v < m.vertices.size(); ++v) vertices[static_cast<std::size_t>(new_id[v])] = m.vertices[v];
-  m.vertices = std::move(vertices);
-  for (Tri& t : m.triangles) {
-    for (auto& i : t) i = new_id[static_cast<std::size_t>(i)];
-  }
-  std::shuffle(m.triangles.begin(), m.triangles.end(), rng);
-  return m;
-}
+TriangleMesh shuffled(const TriangleMesh& m, unsigned seed) { return test::shuffled(m, std::mt19937(seed)); }
 
 /// A (n + 1)² lattice grid in the plane z = 0 triangulated into 2n² triangles, with every
 /// vertex's z set by @p height(i, j).

@@ -2,7 +2,10 @@
 // Small meshes shared by the geometry tests.
 #pragma once
 
+#include <algorithm>
 #include <random>
+#include <utility>
+#include <vector>
 
 #include "ido/geometry/triangle_mesh.h"
 
@@ -26,6 +29,23 @@ inline geometry::TriangleMesh merged(geometry::TriangleMesh a, const geometry::T
     a.triangles.push_back(t);
   }
   return a;
+}
+
+/// @p mesh with its vertices and triangles in random order drawn from @p rng (the same
+/// surface, no index locality left).
+template <class Rng>
+geometry::TriangleMesh shuffled(geometry::TriangleMesh mesh, Rng&& rng) {
+  std::vector<std::int32_t> new_id(mesh.vertices.size());
+  for (std::size_t v = 0; v < new_id.size(); ++v) new_id[v] = static_cast<std::int32_t>(v);
+  std::shuffle(new_id.begin(), new_id.end(), rng);
+  std::vector<Vec3> vertices(mesh.vertices.size());
+  for (std::size_t v = 0; v < mesh.vertices.size(); ++v) vertices[static_cast<std::size_t>(new_id[v])] = mesh.vertices[v];
+  mesh.vertices = std::move(vertices);
+  for (Tri& t : mesh.triangles) {
+    for (auto& i : t) i = new_id[static_cast<std::size_t>(i)];
+  }
+  std::shuffle(mesh.triangles.begin(), mesh.triangles.end(), rng);
+  return mesh;
 }
 
 }  // namespace ido::test
