@@ -423,15 +423,21 @@ std::vector<std::pair<std::uint64_t, int>> leaves_of(const TetHierarchy& h) {
   return out;
 }
 
+// @p count random burr centres inside the 10 × 8 × 6 mm test block, 1 mm from its faces.
+std::vector<Vec3> burr_centres_in_block(int count, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<Vec3> centres;
+  for (int i = 0; i < count; ++i) centres.emplace_back(1 + 8 * u(rng), 1 + 6 * u(rng), 1 + 4 * u(rng));
+  return centres;
+}
+
 TEST(Erosion, VisitBudgetSplitsTheWorkButNotTheResult) {
   // The same burr positions with no budget and with a budget of 400 visits per pass (v_list rebuilds 300) (and
   // no coalescing): every pass does at most the budget plus one dry run, the work carries
   // over, and once finished the trees are identical. Meanwhile the chunked v_lists rebuilt
   // from the changed nodes equal a full rebuild (after flushing) every 40 passes, at chunk levels 0, 2, 3.
-  std::mt19937 rng(5);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  std::vector<Vec3> centres;
-  for (int i = 0; i < 16; ++i) centres.emplace_back(1 + 8 * u(rng), 1 + 6 * u(rng), 1 + 4 * u(rng));
+  const std::vector<Vec3> centres = burr_centres_in_block(16, 5);
   TetHierarchy reference(make_block({10, 8, 6}, 2.0));
   Eroder full({.removal_rate_mm3_per_s = 0.0, .max_depth = 4, .max_node_visits = 0});
   for (const auto& c : centres) full.erode(reference, c, 1.2, 1.0, 0.01);
@@ -499,10 +505,7 @@ TEST(Erosion, LeavesNoSiblingBlockOfEightFullOrEightErasedLeaves) {
   // finds a descendant that goes, and an idle refinement is undone on leaving its node:
   // disabling both fails this test, either one alone does not) or 8 erased leaves (merged
   // into the parent), so merging all-full blocks back into their parent has nothing to merge.
-  std::mt19937 rng(11);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  std::vector<Vec3> centres;
-  for (int i = 0; i < 24; ++i) centres.emplace_back(1 + 8 * u(rng), 1 + 6 * u(rng), 1 + 4 * u(rng));
+  const std::vector<Vec3> centres = burr_centres_in_block(24, 11);
   const std::vector<ErosionOptions> options{
       {.removal_rate_mm3_per_s = 0.0, .max_depth = 5, .max_node_visits = 0},
       {.removal_rate_mm3_per_s = 0.0, .max_depth = 5, .max_node_visits = 300},
