@@ -209,21 +209,94 @@ bool sphere_touches_tet(const std::array<Vec3, 4>& x, const Vec3& c, double r) {
   return false;
 }
 
+#ifdef IDO_BENCH_OPENVDB
+// Voxel removal in OpenVDB on the same trace: voxels of edge = leaf edge at `depth`; per
+// update, 1000 sample points are looked up (collision) and the voxels inside the sphere
+// switched off (erosion). No surface extraction (ours includes the v_list rebuild). Fills
+// the per-update wall and thread-CPU times (s) and returns the grid's memUsage() (bytes)
+// after the trace; *voxel_mm gets the voxel edge.
+double run_openvdb_trace(int depth, std::vector<double>& times, std::vector<double>& cpu_times, double* voxel_mm) {
+  openvdb::initialize();
+  const double h = leaf_edge(depth) / std::sqrt(3.0) * std::sqrt(2.0);  // voxel edge ~ leaf mean edge
+  if (voxel_mm != nullptr) *voxel_mm = h;
+  auto grid = openvdb::BoolGrid::create(false);
+  grid->setTransform(openvdb::math::Transform::createLinearTransform(h));
+  const openvdb::Coord hi(static_cast<int>(kBlock.x() / h) - 1, static_cast<int>(kBlock.y() / h) - 1,
+                          static_cast<int>(kBlock.z() / h) - 1);
+  grid->denseFill(openvdb::CoordBBox(openvdb::Coord(0, 0, 0), hi), true, true);
+  grid->tree().prune();
+  const Tool tool({.burr_radius_mm = kRadius, .sample_count = 1000});
+  auto acc = grid->getAccessor();
+  times.clear();
+  cpu_times.clear();
+  Vec3 last = trace(0);
+  for (int i = 0; i < kUpdates; ++i) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const double c0 = thread_cpu_s();
+    const Vec3 c = trace(i);
+    int inside = 0;
+    for (const auto& s : tool.burr_samples()) {
+      const Vec3 p = c + s;
+      inside += acc.isValueOn(openvdb::Coord(static_cast<int>(std::floor(p.x() / h)), static_cast<int>(std::floor(p.y() / h)),
+                                             static_cast<int>(std::floor(p.z() / h))))
+                    ? 1
+                    : 0;
+    }
+    benchmark::DoNotOptimize(inside);
+    const int n = std::max(1, static_cast<int>(std::ceil((c - last).norm() / (0.25 * kRadius))));
+    for (int k = 1; k <= n; ++k) {
+      const Vec3 q = last + (c - last) * (double(k) / n);
+      const int r = static_cast<int>(std::ceil(kRadius / h)) + 1;
+      const openvdb::Coord ctr(static_cast<int>(std::floor(q.x() / h)), static_cast<int>(std::floor(q.y() / h)),
+                               static_cast<int>(std::floor(q.z() / h)));
+      for (int dx = -r; dx <= r; ++dx)
+        for (int dy = -r; dy <= r; ++dy)
+          for (int dz = -r; dz <= r; ++dz) {
+            const openvdb::Coord v = ctr.offsetBy(dx, dy, dz);
+            const Vec3 centre((v.x() + 0.5) * h, (v.y() + 0.5) * h, (v.z() + 0.5) * h);
+            if ((centre - q).squaredNorm() <= kRadius * kRadius && acc.isValueOn(v)) acc.setValueOff(v, false);
+          }
+    }
+    last = c;
+    times.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    cpu_times.push_back(thread_cpu_s() - c0);
+  }
+  return static_cast<double>(grid->memUsage());
+}
+
+// See run_openvdb_trace.
+void BM_OpenVdbUpdateTime(benchmark::State& state) {
+  const int depth = static_cast<int>(state.range(0));
+  std::vector<double> times;
+  std::vector<double> cpu_times;
+  double mem = 0.0, h = 0.0;
+  for (auto _ : state) mem = run_openvdb_trace(depth, times, cpu_times, &h);
+  add_ms_counters(state, "", times);
+  add_ms_counters(state, "cpu_", cpu_times);
+  double total = 0.0;
+  for (const double t : cpu_times) total += t;
+  state.counters["cpu_total_s"] = total;
+  state.counters["memory_kB"] = mem / 1024.0;
+  state.counters["voxel_mm"] = h;
+}
+#endif
+
 // After the trace of BM_UpdateTime (default budgets, backlog finished), what the node
 // storage holds: sibling blocks by kind — (a) 8 full leaves, (b) 8 leaves, some erased,
 // (c) at least one internal child, (d) 8 erased leaves (must be 0: they merge) — and the
 // full leaves below a root that no burr position touched (exact sphere–tetrahedron test
 // against every queued sub-step sphere): material refined only because its parent
-// straddled the burr. Also the size of two denser encodings of the same tree, computed
-// from the counts (not implemented): 2-bit child states + one 32-bit first-child-block
-// index per block (6 bytes per block; needs the internal children's blocks contiguous),
-// the same with blocks of 8 leaves held as a one-byte mask, and 2 bits per node in
-// breadth-first order (static, no O(1) update). Arg: depth.
+// straddled the burr. Then the node storage's real bytes (TetHierarchy::node_storage_bytes:
+// root words, page table, every page byte handed out — live groups, free lists, short page
+// tails; and the capacity with the last page's unused rest) against the memUsage() of
+// OpenVDB's BoolGrid after the same trace at the same resolution (run_openvdb_trace), and
+// for reference the estimate of the encoding from the counts alone (1 byte per node with 8
+// leaf children, 6 per other internal node, no slack) and 2 bits per node (static). Arg: depth.
 void BM_BlockCensus(benchmark::State& state) {
   const int depth = static_cast<int>(state.range(0));
   std::size_t all_full = 0, mixed = 0, with_internal = 0, all_erased = 0, full_leaves = 0, full_untouched = 0,
               erased_leaves = 0, internal_nodes = 0, full_in_mixed = 0, erased_in_mixed = 0, untouched_all_full = 0;
-  std::size_t nodes = 0, storage = 0, roots = 0, live_blocks = 0;
+  std::size_t nodes = 0, storage = 0, capacity = 0, roots = 0, live_group_bytes = 0, free_bytes = 0, pages = 0;
   double bytes = 0.0;
   for (auto _ : state) {
     TetHierarchy h(make_block(kBlock, kBlockCell));
@@ -317,8 +390,11 @@ void BM_BlockCensus(benchmark::State& state) {
     }
     nodes = h.node_count();
     storage = h.node_storage_bytes();
+    capacity = h.node_storage_capacity_bytes();
     roots = h.root_count();
-    live_blocks = h.live_blocks();
+    live_group_bytes = h.live_group_bytes();
+    free_bytes = h.free_bytes();
+    pages = h.page_count();
     bytes = h.bytes_per_node();
   }
   state.counters["blocks_all_full"] = static_cast<double>(all_full);
@@ -326,7 +402,6 @@ void BM_BlockCensus(benchmark::State& state) {
   state.counters["blocks_mixed_leaves"] = static_cast<double>(mixed);
   state.counters["blocks_with_internal"] = static_cast<double>(with_internal);
   state.counters["blocks_all_erased"] = static_cast<double>(all_erased);
-  state.counters["live_blocks"] = static_cast<double>(live_blocks);
   state.counters["full_in_mixed"] = static_cast<double>(full_in_mixed);
   state.counters["erased_in_mixed"] = static_cast<double>(erased_in_mixed);
   state.counters["full_leaves"] = static_cast<double>(full_leaves);
@@ -336,10 +411,20 @@ void BM_BlockCensus(benchmark::State& state) {
   state.counters["nodes"] = static_cast<double>(nodes);
   state.counters["bytes_per_node"] = bytes;
   state.counters["node_storage_kB"] = static_cast<double>(storage) / 1024.0;
-  state.counters["est_6B_per_block_kB"] = static_cast<double>(4 * roots + 6 * live_blocks) / 1024.0;
-  // 2-bit codes full / erased / internal with 8 leaf children / other internal; a node of
-  // the third kind is one byte (its children's full/erased mask), of the fourth 6 bytes
-  // (its children's codes + the index of their records): allocator slack not counted.
+  state.counters["node_capacity_kB"] = static_cast<double>(capacity) / 1024.0;
+  state.counters["live_groups_kB"] = static_cast<double>(live_group_bytes) / 1024.0;
+  state.counters["free_lists_kB"] = static_cast<double>(free_bytes) / 1024.0;
+  state.counters["pages"] = static_cast<double>(pages);
+#ifdef IDO_BENCH_OPENVDB
+  std::vector<double> vdb_times, vdb_cpu;
+  const double vdb = run_openvdb_trace(depth, vdb_times, vdb_cpu, nullptr);
+  state.counters["vdb_memory_kB"] = vdb / 1024.0;
+  state.counters["storage_over_vdb"] = static_cast<double>(storage) / vdb;
+  state.counters["capacity_over_vdb"] = static_cast<double>(capacity) / vdb;
+#endif
+  // Estimate from the counts: 2-bit codes full / erased / internal with 8 leaf children /
+  // other internal; a node of the third kind is one byte (its children's full/erased mask),
+  // of the fourth 6 bytes (its children's codes + the index of their records); no slack.
   state.counters["est_leaf_mask_kB"] = static_cast<double>(4 * roots + mixed + 6 * with_internal) / 1024.0;
   state.counters["est_2bit_per_node_kB"] = static_cast<double>(nodes) / 4.0 / 1024.0;
 }
@@ -399,69 +484,6 @@ BENCHMARK(BM_HapticLoop)
     ->Unit(benchmark::kMillisecond);
 
 #ifdef IDO_BENCH_OPENVDB
-// Voxel removal in OpenVDB on the same trace: voxels of edge = leaf edge at `depth`; per
-// update, 1000 sample points are looked up (collision) and the voxels inside the sphere
-// switched off (erosion). No surface extraction (ours includes the v_list rebuild).
-void BM_OpenVdbUpdateTime(benchmark::State& state) {
-  openvdb::initialize();
-  const int depth = static_cast<int>(state.range(0));
-  const double h = leaf_edge(depth) / std::sqrt(3.0) * std::sqrt(2.0);  // voxel edge ~ leaf mean edge
-  std::vector<double> times;
-  std::vector<double> cpu_times;
-  double mem = 0.0;
-  for (auto _ : state) {
-    auto grid = openvdb::BoolGrid::create(false);
-    grid->setTransform(openvdb::math::Transform::createLinearTransform(h));
-    const openvdb::Coord hi(static_cast<int>(kBlock.x() / h) - 1, static_cast<int>(kBlock.y() / h) - 1,
-                            static_cast<int>(kBlock.z() / h) - 1);
-    grid->denseFill(openvdb::CoordBBox(openvdb::Coord(0, 0, 0), hi), true, true);
-    grid->tree().prune();
-    const Tool tool({.burr_radius_mm = kRadius, .sample_count = 1000});
-    auto acc = grid->getAccessor();
-    times.clear();
-    cpu_times.clear();
-    Vec3 last = trace(0);
-    for (int i = 0; i < kUpdates; ++i) {
-      const auto t0 = std::chrono::steady_clock::now();
-      const double c0 = thread_cpu_s();
-      const Vec3 c = trace(i);
-      int inside = 0;
-      for (const auto& s : tool.burr_samples()) {
-        const Vec3 p = c + s;
-        inside += acc.isValueOn(openvdb::Coord(static_cast<int>(std::floor(p.x() / h)), static_cast<int>(std::floor(p.y() / h)),
-                                               static_cast<int>(std::floor(p.z() / h))))
-                      ? 1
-                      : 0;
-      }
-      benchmark::DoNotOptimize(inside);
-      const int n = std::max(1, static_cast<int>(std::ceil((c - last).norm() / (0.25 * kRadius))));
-      for (int k = 1; k <= n; ++k) {
-        const Vec3 q = last + (c - last) * (double(k) / n);
-        const int r = static_cast<int>(std::ceil(kRadius / h)) + 1;
-        const openvdb::Coord ctr(static_cast<int>(std::floor(q.x() / h)), static_cast<int>(std::floor(q.y() / h)),
-                                 static_cast<int>(std::floor(q.z() / h)));
-        for (int dx = -r; dx <= r; ++dx)
-          for (int dy = -r; dy <= r; ++dy)
-            for (int dz = -r; dz <= r; ++dz) {
-              const openvdb::Coord v = ctr.offsetBy(dx, dy, dz);
-              const Vec3 centre((v.x() + 0.5) * h, (v.y() + 0.5) * h, (v.z() + 0.5) * h);
-              if ((centre - q).squaredNorm() <= kRadius * kRadius && acc.isValueOn(v)) acc.setValueOff(v, false);
-            }
-      }
-      last = c;
-      times.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-      cpu_times.push_back(thread_cpu_s() - c0);
-    }
-    mem = static_cast<double>(grid->memUsage());
-  }
-  add_ms_counters(state, "", times);
-  add_ms_counters(state, "cpu_", cpu_times);
-  double total = 0.0;
-  for (const double t : cpu_times) total += t;
-  state.counters["cpu_total_s"] = total;
-  state.counters["memory_kB"] = mem / 1024.0;
-  state.counters["voxel_mm"] = h;
-}
 BENCHMARK(BM_OpenVdbUpdateTime)->DenseRange(4, 8)->Iterations(1)->Unit(benchmark::kMillisecond);
 #endif
 

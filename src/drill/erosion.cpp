@@ -264,6 +264,7 @@ Eroder::Enter Eroder::enter(TetHierarchy& h, const NodeRef& node, std::uint32_t 
     }
     // The frames below are the node's ancestors: their words give the path.
     const NodeRef top = h.erase(node, std::span<const std::uint32_t>(m_frame_word.data(), node.depth));
+    refresh_frame_words(h);  // the erase rewrote the ancestors' words (masks, moved groups, merges)
     stats.removed_volume_mm3 += material;
     ++stats.nodes_removed;
     // Ancestors merged into erased leaves change what lies across their faces too.
@@ -281,7 +282,8 @@ Eroder::Enter Eroder::enter(TetHierarchy& h, const NodeRef& node, std::uint32_t 
     ++m_visits;  // the dry run's visit of the node itself (its tests are the ones above)
     if (!would_remove_below(x, node.depth, finest, m_centre, m_radius, m_visits)) return Enter::Done;
     if (!h.refine(node)) return Enter::Done;
-    word = node_word(h, node);  // its new children's block
+    refresh_frame_words(h);  // the parent's word (mask → group) and its ancestors' may change
+    word = node.depth == 0 ? h.root_word(node.root) : h.child_word(m_stack.back().word, node.slot(node.depth));
     refined_here = true;
     ++stats.nodes_refined;
     mark(node, face_mask);
@@ -297,6 +299,21 @@ void Eroder::leave(TetHierarchy& h, const Frame& f, ErosionStats& stats) {
   if (h.state(f.node) == NodeState::Internal && h.coarsen(f.node)) {
     if (f.refined_here) --stats.nodes_refined;
     mark(f.node, f.face_mask);
+    refresh_frame_words(h);
+  }
+}
+
+// Re-reads the words of the frames on the stack top-down (frame k is at depth k, the child of
+// frame k − 1) after a change of the tree: a change rewrites the words of the changed node's
+// ancestors (a mask bit, a group moved to its new size, a merge into an erased leaf). A
+// frame whose node merged reads kErased, so its remaining children read kErased as well.
+void Eroder::refresh_frame_words(const TetHierarchy& h) noexcept {
+  std::uint32_t w = 0;
+  for (std::size_t k = 0; k < m_stack.size(); ++k) {
+    Frame& f = m_stack[k];
+    w = k == 0 ? h.root_word(f.node.root) : h.child_word(w, f.node.slot(f.node.depth));
+    f.word = w;
+    m_frame_word[f.node.depth] = w;
   }
 }
 
@@ -421,9 +438,9 @@ ErosionStats Eroder::run(TetHierarchy& hierarchy, std::size_t max_node_visits) {
         }
         const auto s = static_cast<std::size_t>(f.next_child++);
         const detail::ErosionChildren& kids = m_children[f.node.depth];
-        // f.word stays readable for the rest of its children: its block is freed only when all
-        // 8 children are erased (merge), which leaves the slots after the current one reading
-        // kErased, and nothing is refined (no block reused) until the frame is done.
+        // f.word is current: every change of the tree re-reads the frames' words
+        // (refresh_frame_words); after a merge of f's node it is kErased, and so are the
+        // children read from it, as they are in the tree.
         const std::uint32_t cw = hierarchy.child_word(f.word, static_cast<int>(s));
         if (cw == TetHierarchy::kErased || kids.beyond[s]) {
           ++m_visits;  // what enter() does for an erased child or one the sphere misses

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
-// Hand-written: the project's adaptive tetrahedral hierarchy (Bey red refinement, node words
-// with a free list of child blocks), after Turini et al. 2007 (IdoLib).
+// Hand-written: the project's adaptive tetrahedral hierarchy (Bey red refinement; node words
+// that are leaf states, inline child masks or ids of variable-size child groups with a free
+// list per size), after Turini et al. 2007 (IdoLib).
 #include "ido/drill/tet_hierarchy.h"
 
 #include <algorithm>
@@ -141,6 +142,7 @@ TetHierarchy::TetHierarchy(const geometry::TetMesh& mesh, const HierarchyOptions
   m_hash_cell = options.hash_cell_mm > 0.0 ? options.hash_cell_mm : m_mean_edge;
   m_density.assign(m_roots.size(), 1.0F);
   m_root_word.assign(m_roots.size(), kFull);
+  m_free.fill(kNone);
   update_root_geometry();
 }
 
@@ -202,120 +204,207 @@ void TetHierarchy::set_vertex_positions(std::span<const Vec3> positions_mm) {
   }
 }
 
-std::uint32_t TetHierarchy::word_at(const NodeRef& node) const noexcept {
-  std::uint32_t w = m_root_word[node.root];
+// Words of the node's ancestors and its own, w[0..depth], read top-down. False when it lies
+// below a leaf (w[d] for d beyond that leaf is not written).
+bool TetHierarchy::walk(const NodeRef& node, PathWords& w) const noexcept {
+  w[0] = m_root_word[node.root];
   for (int level = 1; level <= node.depth; ++level) {
-    if (w == kFull || w == kErased) return w;  // below a leaf: inherit its state
-    w = block(w)[static_cast<std::size_t>(node.slot(level))];
+    const std::uint32_t p = w[static_cast<std::size_t>(level - 1)];
+    if (p >= kErased) return false;
+    w[static_cast<std::size_t>(level)] = child_word(p, node.slot(level));
   }
-  return w;
-}
-
-std::uint32_t* TetHierarchy::word_of(const NodeRef& node) noexcept {
-  std::uint32_t* w = &m_root_word[node.root];
-  for (int level = 1; level <= node.depth; ++level) {
-    if (*w == kFull || *w == kErased) return nullptr;
-    w = &block(*w)[static_cast<std::size_t>(node.slot(level))];
-  }
-  return w;
+  return true;
 }
 
 NodeState TetHierarchy::state(const NodeRef& node) const noexcept {
-  const std::uint32_t w = word_at(node);
-  if (w == kFull) return NodeState::Full;
-  if (w == kErased) return NodeState::Erased;
-  return NodeState::Internal;
+  std::uint32_t w = m_root_word[node.root];
+  for (int level = 1; level <= node.depth && w < kErased; ++level) w = child_word(w, node.slot(level));
+  return state_of_word(w);
 }
 
-std::uint32_t TetHierarchy::allocate_block(std::uint32_t fill) {
-  std::uint32_t b;
-  if (m_free != kNoBlock) {
-    b = m_free;
-    m_free = block(b)[0];
+std::size_t TetHierarchy::group_size(std::uint32_t id) const noexcept {
+  const std::uint8_t* g = group(id);
+  return std::max(kMinGroup, payload_offset(static_cast<unsigned>(g[0]) | (static_cast<unsigned>(g[1]) << 8)));
+}
+
+std::uint32_t TetHierarchy::allocate_group(std::size_t size) {
+  std::uint32_t id = m_free[size];
+  if (id != kNone) {
+    const std::uint8_t* g = group(id);
+    m_free[size] = static_cast<std::uint32_t>(g[0]) | (static_cast<std::uint32_t>(g[1]) << 8) |
+                   (static_cast<std::uint32_t>(g[2]) << 16) | (static_cast<std::uint32_t>(g[3]) << 24);
+    m_free_bytes -= size;
   } else {
-    if (m_block_count >= kNoBlock) throw Error("drill: node storage exhausted");
-    b = static_cast<std::uint32_t>(m_block_count);
-    if ((b & (kBlocksPerPage - 1U)) == 0) m_pages.emplace_back(kBlocksPerPage);  // a new page; none moves
-    ++m_block_count;
+    if (m_pages.empty() || m_page_used + size > kPageBytes) {
+      if (m_pages.size() + 1 >= (kMaskBase >> kPageShift)) throw Error("drill: node storage exhausted");
+      // The rest of the full page goes to the free list of its size (a group of exactly that
+      // size may take it); too short for any group, it is slack (counted with the free bytes).
+      if (!m_pages.empty()) {
+        const std::size_t tail = kPageBytes - m_page_used;
+        m_free_bytes += tail;
+        if (tail >= kMinGroup) {
+          const auto tid = static_cast<std::uint32_t>(((m_pages.size() - 1) << kPageShift) | m_page_used);
+          std::uint8_t* g = group(tid);
+          const std::uint32_t next = m_free[tail];
+          for (int k = 0; k < 4; ++k) g[k] = static_cast<std::uint8_t>(next >> (8 * k));
+          m_free[tail] = tid;
+        }
+      }
+      m_pages.emplace_back(kPageBytes);  // a new page; none moves
+      m_page_used = 0;
+    }
+    id = static_cast<std::uint32_t>(((m_pages.size() - 1) << kPageShift) | m_page_used);
+    m_page_used += size;
   }
-  block(b).fill(fill);
-  ++m_live_blocks;
-  return b;
+  ++m_live_groups;
+  m_live_group_bytes += size;
+  return id;
 }
 
-void TetHierarchy::free_block(std::uint32_t b) {
-  block(b)[0] = m_free;
-  m_free = b;
-  --m_live_blocks;
+void TetHierarchy::free_group(std::uint32_t id) {
+  const std::size_t size = group_size(id);
+  std::uint8_t* g = group(id);
+  const std::uint32_t next = m_free[size];
+  for (int k = 0; k < 4; ++k) g[k] = static_cast<std::uint8_t>(next >> (8 * k));
+  m_free[size] = id;
+  m_free_bytes += size;
+  --m_live_groups;
+  m_live_group_bytes -= size;
+}
+
+// Writes the codes and payloads of @p children (their words) into group bytes @p g.
+void TetHierarchy::write_group(std::uint8_t* g, const std::array<std::uint32_t, 8>& children) const noexcept {
+  unsigned codes = 0;
+  std::size_t off = 2;
+  for (std::size_t s = 0; s < 8; ++s) {
+    const std::uint32_t c = children[s];
+    unsigned code = kCodeErased;
+    if (c == kFull) {
+      code = kCodeFull;
+    } else if (c == kErased) {
+      code = kCodeErased;
+    } else if (c >= kMaskBase) {
+      code = kCodeMask;
+      g[off++] = static_cast<std::uint8_t>(c & 0xFFU);
+    } else {
+      code = kCodeGroup;
+      for (int k = 0; k < 4; ++k) g[off++] = static_cast<std::uint8_t>(c >> (8 * k));
+    }
+    codes |= code << (2 * s);
+  }
+  g[0] = static_cast<std::uint8_t>(codes & 0xFFU);
+  g[1] = static_cast<std::uint8_t>(codes >> 8);
+}
+
+// The word of an internal node with children words @p children: a mask word when all are
+// leaves, else a newly allocated group.
+std::uint32_t TetHierarchy::encode(const std::array<std::uint32_t, 8>& children) {
+  std::size_t size = 2;
+  unsigned full = 0;
+  for (std::size_t s = 0; s < 8; ++s) {
+    const std::uint32_t c = children[s];
+    if (c == kFull) full |= 1U << s;
+    if (c < kErased) size += c >= kMaskBase ? 1 : 4;
+  }
+  if (size == 2) return kMaskBase | full;
+  const std::uint32_t id = allocate_group(std::max(size, kMinGroup));
+  write_group(group(id), children);
+  return id;
+}
+
+// Sets the word of the ancestor at depth @p depth of @p node (its current word is w[depth];
+// w holds the current words of the path) to @p word, and rewrites the ancestors' storage up
+// the path as far as it changes: a mask parent takes the bit (or becomes a group when the
+// child becomes internal), a group parent is rewritten in place when the child's payload
+// keeps its size, else re-encoded at its new size (a mask when no internal child is left),
+// which changes the parent's own word in the grandparent, and so on. The old word's own
+// storage is the caller's (free_subtree before, when it goes). w is updated.
+void TetHierarchy::set_word(const NodeRef& node, int depth, PathWords& w, std::uint32_t word) {
+  for (int d = depth;; --d) {
+    const auto du = static_cast<std::size_t>(d);
+    const std::uint32_t old = w[du];
+    w[du] = word;
+    if (d == 0) {
+      m_root_word[node.root] = word;
+      return;
+    }
+    const std::uint32_t pw = w[du - 1];
+    const auto s = static_cast<std::size_t>(node.slot(d));
+    std::array<std::uint32_t, 8> children{};
+    for (std::size_t c = 0; c < 8; ++c) children[c] = child_word(pw, static_cast<int>(c));
+    children[s] = word;
+    std::uint32_t parent_word = 0;
+    if (!is_group(pw)) {
+      parent_word = encode(children);
+    } else {
+      auto payload = [](std::uint32_t x) { return x >= kErased ? 0 : x >= kMaskBase ? 1 : 4; };
+      if (payload(old) == payload(word)) {
+        write_group(group(pw), children);  // same size: in place, the parent's word stays
+        return;
+      }
+      parent_word = encode(children);
+      free_group(pw);
+    }
+    word = parent_word;
+  }
 }
 
 void TetHierarchy::free_subtree(std::uint32_t word) {
-  if (word == kFull || word == kErased) return;
-  for (std::uint32_t c : block(word)) free_subtree(c);
-  free_block(word);
+  if (word >= kErased) return;
+  --m_internal;
+  if (!is_group(word)) return;
+  for (int s = 0; s < 8; ++s) free_subtree(child_word(word, s));
+  free_group(word);
 }
 
 bool TetHierarchy::refine(const NodeRef& node) {
   if (node.depth >= kMaxDepth) return false;
-  std::uint32_t* w = word_of(node);
-  if (w == nullptr || *w != kFull) return false;
-  *w = allocate_block(kFull);  // pages never move, so w stays valid
+  PathWords w{};
+  if (!walk(node, w) || w[node.depth] != kFull) return false;
+  set_word(node, node.depth, w, kMaskBase | 0xFFU);
+  ++m_internal;
   return true;
 }
 
 NodeRef TetHierarchy::erase(const NodeRef& node) {
-  // The words on the path from the root, found in one descent (pages never move).
-  std::array<std::uint32_t*, kMaxDepth + 1> path{};
-  std::uint32_t* w = &m_root_word[node.root];
-  path[0] = w;
-  for (int level = 1; level <= node.depth; ++level) {
-    if (*w == kFull || *w == kErased) return node;  // below a leaf: nothing to do for erased, refine first for full
-    w = &block(*w)[static_cast<std::size_t>(node.slot(level))];
-    path[static_cast<std::size_t>(level)] = w;
-  }
-  return erase_path(node, path);
+  PathWords w{};
+  if (!walk(node, w)) return node;  // below a leaf: nothing to do for erased, refine first for full
+  return erase_path(node, w);
 }
 
 NodeRef TetHierarchy::erase(const NodeRef& node, std::span<const std::uint32_t> ancestor_words) {
   if (ancestor_words.size() < node.depth) return erase(node);
-  for (std::size_t d = 0; d < node.depth; ++d)
-    if (ancestor_words[d] == kFull || ancestor_words[d] == kErased || ancestor_words[d] >= m_block_count)
-      return erase(node);  // not internal words: walk from the root instead
-  std::array<std::uint32_t*, kMaxDepth + 1> path{};
-  path[0] = &m_root_word[node.root];
-  for (int level = 1; level <= node.depth; ++level)
-    path[static_cast<std::size_t>(level)] =
-        &block(ancestor_words[static_cast<std::size_t>(level - 1)])[static_cast<std::size_t>(node.slot(level))];
-  return erase_path(node, path);
+  if (node.depth > 0 && ancestor_words[0] != m_root_word[node.root]) return erase(node);
+  PathWords w{};
+  for (std::size_t d = 0; d < node.depth; ++d) {
+    const std::uint32_t a = ancestor_words[d];
+    if (a >= kErased || (is_group(a) && (a >> kPageShift) >= m_pages.size())) return erase(node);  // not internal
+    w[d] = a;
+  }
+  w[node.depth] = node.depth == 0 ? m_root_word[node.root] : child_word(w[node.depth - 1U], node.slot(node.depth));
+  return erase_path(node, w);
 }
 
-// Erases the node whose word path[node.depth] points to (path[d]: the word of its ancestor at
-// depth d) and merges erased sibling blocks upward.
-NodeRef TetHierarchy::erase_path(const NodeRef& node, std::array<std::uint32_t*, kMaxDepth + 1>& path) {
-  std::uint32_t* w = path[node.depth];
-  free_subtree(*w);
-  *w = kErased;
-  // Merge fully erased sibling blocks upward.
+// Erases the node (w: the current words of its path) and merges erased sibling blocks upward.
+NodeRef TetHierarchy::erase_path(const NodeRef& node, PathWords& w) {
+  free_subtree(w[node.depth]);
+  set_word(node, node.depth, w, kErased);
+  // Merge fully erased siblings upward: a parent whose children are all erased holds the
+  // empty mask (a group always has an internal child).
   NodeRef n = node;
-  while (n.depth > 0) {
-    std::uint32_t* pw = path[static_cast<std::size_t>(n.depth - 1)];
-    const std::uint32_t b = *pw;
-    const Block& blk = block(b);
-    if (!std::all_of(blk.begin(), blk.end(), [](std::uint32_t c) { return c == kErased; })) break;
-    free_block(b);
-    *pw = kErased;
+  while (n.depth > 0 && w[n.depth - 1U] == kMaskBase) {
+    --m_internal;
     n = n.parent();
+    set_word(node, n.depth, w, kErased);
   }
   return n;
 }
 
 bool TetHierarchy::coarsen(const NodeRef& node) {
-  std::uint32_t* w = word_of(node);
-  if (w == nullptr || *w == kFull || *w == kErased) return false;
-  const Block& blk = block(*w);
-  if (!std::all_of(blk.begin(), blk.end(), [](std::uint32_t c) { return c == kFull; })) return false;
-  free_block(*w);
-  *w = kFull;
+  PathWords w{};
+  if (!walk(node, w) || w[node.depth] != (kMaskBase | 0xFFU)) return false;
+  set_word(node, node.depth, w, kFull);
+  --m_internal;
   return true;
 }
 
@@ -429,11 +518,11 @@ Location TetHierarchy::descend(std::uint32_t root, const std::array<double, 4>& 
   loc.leaf = NodeRef{root, 0, 0};
   std::uint32_t w = m_root_word[root];
   auto lambda = root_lambda;
-  while (w != kFull && w != kErased) {
+  while (w < kErased) {
     const int s = TreeTable::locate_child(lambda);
     lambda = t.to_child_coordinates(s, lambda);
     loc.leaf = loc.leaf.child(s);
-    w = block(w)[static_cast<std::size_t>(s)];
+    w = child_word(w, s);
   }
   loc.state = w == kFull ? NodeState::Full : NodeState::Erased;
   return loc;

@@ -121,7 +121,7 @@ class Eroder {
   // One level of the explicit depth-first traversal: a partly covered node being descended.
   struct Frame {
     NodeRef node;
-    std::uint32_t word = 0;  // the node's storage word (internal: its children's block)
+    std::uint32_t word = 0;  // the node's storage word, re-read after every change of the tree
     std::array<Vec3, 4> x;
     std::array<std::int8_t, 4> root_face;
     std::int8_t finest = 0;
@@ -136,6 +136,7 @@ class Eroder {
               double d2, std::uint8_t inside, int finest, const std::array<std::int8_t, 4>& root_face,
               ErosionStats& stats);
   void leave(TetHierarchy& h, const Frame& f, ErosionStats& stats);
+  void refresh_frame_words(const TetHierarchy& h) noexcept;
   void mark(const NodeRef& node, std::uint8_t faces);
   void start_sphere(const TetHierarchy& h, const Sphere& s);
   void drop_all(TetHierarchy& h, ErosionStats& stats);

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <array>
+#include <bit>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -83,12 +84,23 @@ struct HierarchyOptions {
 };
 
 /// Adaptive tetrahedral hierarchy for material removal: every tetrahedron of the input mesh
-/// is the root of a tree of Bey red refinements (TreeTable). Node storage is one 32-bit
-/// word per node: kFull, kErased, or the index of the block of its 8 children's words.
-/// Blocks of erased siblings merge back into their parent and return to a free list.
-/// Blocks live in fixed pages of kBlocksPerPage, so growing the storage never moves (copies)
-/// the blocks already in use: a refinement costs O(1) even when the storage grows.
-/// Geometry is never stored: it is computed from the root and the node's path.
+/// is the root of a tree of Bey red refinements (TreeTable). Geometry is never stored: it
+/// is computed from the root and the node's path.
+///
+/// Node storage (what a node's 32-bit storage word means):
+/// - kFull / kErased: a full / erased leaf;
+/// - a mask word (kMaskBase | m, 8 bits): an internal node whose 8 children are all leaves,
+///   bit s of m set when child s is full; it costs 1 byte in its parent's group (nothing
+///   when it is a root);
+/// - otherwise the id of a child group: an internal node with at least one internal child.
+///   The group holds the 8 children's 2-bit codes (erased, full, mask, group; 2 bytes) and,
+///   in slot order, 1 byte (the mask) per mask child and 4 bytes (the group id) per group
+///   child: 3–34 bytes (4 allocated at least). Groups live in fixed pages of kPageBytes (growing never moves
+///   them) with a free list per size; a group is re-allocated at its new size when a child
+///   changes kind.
+/// Fully erased siblings merge into their parent. A word read by root_word()/child_word()
+/// stays valid until the next refine/erase/coarsen (which may move groups and rewrite
+/// masks): a caller holding words re-reads them after each change.
 ///
 /// Not thread-safe: one thread (the collision/erosion thread) owns it.
 class TetHierarchy {
@@ -120,12 +132,24 @@ class TetHierarchy {
   /// State of a node; Erased for a node below an erased or full leaf is not meaningful:
   /// the caller walks from the root (see for_each_leaf).
   [[nodiscard]] NodeState state(const NodeRef& node) const noexcept;
-  /// Storage word of root @p r: kFull, kErased, or (internal) the index of its children's
-  /// block. With child_word() it lets a top-down walk read states in O(1) per node.
+  /// Storage word of root @p r (see the class comment). With child_word() it lets a
+  /// top-down walk read states in O(1) per node; valid until the next change of the tree.
   [[nodiscard]] std::uint32_t root_word(std::size_t r) const noexcept { return m_root_word[r]; }
-  /// Word of child slot @p s of an internal node whose word is @p word.
+  /// Word of child slot @p s of the node whose word is @p word; a leaf's word for a leaf
+  /// (below a leaf every node inherits its state).
   [[nodiscard]] std::uint32_t child_word(std::uint32_t word, int s) const noexcept {
-    return block(word)[static_cast<std::size_t>(s)];
+    if (word >= kMaskBase) {
+      if (word >= kErased) return word;
+      return ((word >> s) & 1U) != 0 ? kFull : kErased;
+    }
+    const std::uint8_t* g = group(word);
+    const unsigned codes = static_cast<unsigned>(g[0]) | (static_cast<unsigned>(g[1]) << 8);
+    const unsigned code = (codes >> (2 * s)) & 3U;
+    if (code < kCodeMask) return code == kCodeFull ? kFull : kErased;
+    const std::size_t off = payload_offset(codes & ((1U << (2 * s)) - 1U));
+    if (code == kCodeMask) return kMaskBase | g[off];
+    return static_cast<std::uint32_t>(g[off]) | (static_cast<std::uint32_t>(g[off + 1]) << 8) |
+           (static_cast<std::uint32_t>(g[off + 2]) << 16) | (static_cast<std::uint32_t>(g[off + 3]) << 24);
   }
   /// The state a storage word stands for.
   [[nodiscard]] static NodeState state_of_word(std::uint32_t word) noexcept {
@@ -134,7 +158,7 @@ class TetHierarchy {
   /// Splits a full leaf into 8 full children. Returns false (and does nothing) if the node
   /// is not a full leaf or is at kMaxDepth.
   bool refine(const NodeRef& node);
-  /// Removes the node's material: the node becomes an erased leaf, its subtree's blocks are
+  /// Removes the node's material: the node becomes an erased leaf, its subtree's storage is
   /// freed, and ancestors whose 8 children are all erased merge into erased leaves. Returns
   /// the topmost node that became an erased leaf (@p node itself when nothing merged, or
   /// when it lies below a leaf and nothing was done).
@@ -142,8 +166,9 @@ class TetHierarchy {
   /// As erase(node) for a node below internal ancestors whose storage words the caller
   /// holds (a top-down traversal): @p ancestor_words[d] is the word of the node's ancestor
   /// at depth d, for every d < node.depth (precondition: each is that ancestor's current
-  /// word, internal), so the path is not walked down from the root. Falls back to
-  /// erase(node) when a given word is not a block index (full, erased or out of range).
+  /// word, internal — words read before the last change of the tree are not), so the path
+  /// is not walked down from the root. Falls back to erase(node) when a given word is not
+  /// internal or the root's word differs.
   NodeRef erase(const NodeRef& node, std::span<const std::uint32_t> ancestor_words);
   /// Undoes a refinement that removed nothing: an internal node whose 8 children are all
   /// full leaves becomes a full leaf again. Returns true if it did.
@@ -193,9 +218,7 @@ class TetHierarchy {
       } else if (it.word == kErased) {
         f(it.node, NodeState::Erased);
       } else {
-        for (int s = 7; s >= 0; --s) {
-          stack[static_cast<std::size_t>(top++)] = {it.node.child(s), block(it.word)[static_cast<std::size_t>(s)]};
-        }
+        for (int s = 7; s >= 0; --s) stack[static_cast<std::size_t>(top++)] = {it.node.child(s), child_word(it.word, s)};
       }
     }
   }
@@ -205,25 +228,35 @@ class TetHierarchy {
   /// Bounding box of root @p r (mm).
   [[nodiscard]] const geometry::Box3& root_box(std::size_t r) const noexcept { return m_root_box[r]; }
 
-  /// Live nodes: every root plus 8 per child block in use.
-  [[nodiscard]] std::size_t node_count() const noexcept { return m_roots.size() + 8 * m_live_blocks; }
-  /// Bytes of node storage: one word per root plus every block handed out (free ones too;
-  /// not the unused rest of the last page).
+  /// Live nodes: every root plus 8 per internal node.
+  [[nodiscard]] std::size_t node_count() const noexcept { return m_roots.size() + 8 * m_internal; }
+  /// Internal nodes (each stands for a block of 8 live children).
+  [[nodiscard]] std::size_t internal_nodes() const noexcept { return m_internal; }
+  /// Child groups in use (internal nodes with an internal child) and their bytes.
+  [[nodiscard]] std::size_t live_groups() const noexcept { return m_live_groups; }
+  [[nodiscard]] std::size_t live_group_bytes() const noexcept { return m_live_group_bytes; }
+  /// Pages of kPageBytes allocated.
+  [[nodiscard]] std::size_t page_count() const noexcept { return m_pages.size(); }
+  /// Bytes on the free lists (freed groups and page tails too short for the next group).
+  [[nodiscard]] std::size_t free_bytes() const noexcept { return m_free_bytes; }
+  /// Bytes of node storage: one word per root plus every page byte handed out — groups in
+  /// use, groups on the free lists, page tails too short for any group — and the page
+  /// table; not the never-used rest of the last page.
   [[nodiscard]] std::size_t node_storage_bytes() const noexcept {
-    return m_root_word.size() * sizeof(std::uint32_t) + m_block_count * sizeof(Block);
+    return m_root_word.size() * sizeof(std::uint32_t) + page_table_bytes() + handed_out_bytes();
   }
-  /// Bytes per live node: (root words + blocks in use) / node_count() — 4 by construction.
+  /// As node_storage_bytes() with the whole of every page allocated (the memory reserved).
+  [[nodiscard]] std::size_t node_storage_capacity_bytes() const noexcept {
+    return m_root_word.size() * sizeof(std::uint32_t) + page_table_bytes() + m_pages.size() * kPageBytes;
+  }
+  /// node_storage_bytes() / node_count(): free lists and allocator slack included.
   [[nodiscard]] double bytes_per_node() const noexcept {
-    return static_cast<double>(m_root_word.size() * sizeof(std::uint32_t) + m_live_blocks * sizeof(Block)) /
-           static_cast<double>(node_count());
-  }
-  /// node_storage_bytes() / node_count(): includes blocks waiting on the free list.
-  [[nodiscard]] double storage_bytes_per_node() const noexcept {
     return static_cast<double>(node_storage_bytes()) / static_cast<double>(node_count());
   }
-  /// Child blocks in use / on the free list.
-  [[nodiscard]] std::size_t live_blocks() const noexcept { return m_live_blocks; }
-  [[nodiscard]] std::size_t free_blocks() const noexcept { return m_block_count - m_live_blocks; }
+  /// node_storage_capacity_bytes() / node_count(): the last page's unused rest included.
+  [[nodiscard]] double storage_bytes_per_node() const noexcept {
+    return static_cast<double>(node_storage_capacity_bytes()) / static_cast<double>(node_count());
+  }
   /// Sum of the volumes of full leaves (mm³).
   [[nodiscard]] double material_volume() const;
   /// Sum of the root volumes (mm³).
@@ -233,26 +266,51 @@ class TetHierarchy {
 
   static constexpr std::uint32_t kFull = 0xFFFFFFFFU;
   static constexpr std::uint32_t kErased = 0xFFFFFFFEU;
+  /// Mask words are kMaskBase | m (m: the 8 children's full bits); group ids are below.
+  static constexpr std::uint32_t kMaskBase = 0xFFFFFE00U;
+  /// Bytes per page of child groups.
+  static constexpr std::uint32_t kPageBytes = 1U << 14;
 
  private:
-  using Block = std::array<std::uint32_t, 8>;
-  static constexpr std::uint32_t kNoBlock = 0xFFFFFFFDU;
-  static constexpr int kPageShift = 12;
-  static constexpr std::uint32_t kBlocksPerPage = 1U << kPageShift;  // 128 KiB pages
+  static constexpr unsigned kCodeErased = 0, kCodeFull = 1, kCodeMask = 2, kCodeGroup = 3;
+  static constexpr int kPageShift = 14;
+  static constexpr std::uint32_t kNone = 0xFFFFFFFFU;  // end of a free list
+  // Groups take 3–34 bytes; at least 4 are allocated (a free group holds a 4-byte link).
+  static constexpr std::size_t kMinGroup = 4, kMaxGroup = 34;
 
-  [[nodiscard]] const Block& block(std::uint32_t b) const noexcept {
-    return m_pages[b >> kPageShift][b & (kBlocksPerPage - 1U)];
+  // Payload bytes of the children whose 2-bit codes are @p codes (1 per mask, 4 per group)
+  // plus the 2 code bytes: the offset of the next child's payload.
+  [[nodiscard]] static std::size_t payload_offset(unsigned codes) noexcept {
+    const unsigned hi = (codes >> 1) & 0x5555U;  // codes 2, 3: a payload
+    const unsigned both = hi & codes;            // code 3: 4 bytes
+    return 2 + static_cast<std::size_t>(std::popcount(hi)) + 3 * static_cast<std::size_t>(std::popcount(both));
   }
-  [[nodiscard]] Block& block(std::uint32_t b) noexcept { return m_pages[b >> kPageShift][b & (kBlocksPerPage - 1U)]; }
+  [[nodiscard]] const std::uint8_t* group(std::uint32_t id) const noexcept {
+    return m_pages[id >> kPageShift].data() + (id & (kPageBytes - 1U));
+  }
+  [[nodiscard]] std::uint8_t* group(std::uint32_t id) noexcept {
+    return m_pages[id >> kPageShift].data() + (id & (kPageBytes - 1U));
+  }
+  [[nodiscard]] std::size_t handed_out_bytes() const noexcept {
+    return m_pages.empty() ? 0 : (m_pages.size() - 1) * kPageBytes + m_page_used;
+  }
+  [[nodiscard]] std::size_t page_table_bytes() const noexcept {
+    return m_pages.capacity() * sizeof(std::vector<std::uint8_t>);
+  }
+  [[nodiscard]] static bool is_group(std::uint32_t w) noexcept { return w < kMaskBase; }
+  [[nodiscard]] std::size_t group_size(std::uint32_t id) const noexcept;  // bytes allocated
 
   [[nodiscard]] Location descend(std::uint32_t root, const std::array<double, 4>& root_lambda) const noexcept;
   [[nodiscard]] bool outside_root_box(std::size_t r, const Vec3& p_mm) const noexcept;
-  std::uint32_t* word_of(const NodeRef& node) noexcept;
-  [[nodiscard]] std::uint32_t word_at(const NodeRef& node) const noexcept;
-  std::uint32_t allocate_block(std::uint32_t fill);
-  NodeRef erase_path(const NodeRef& node, std::array<std::uint32_t*, kMaxDepth + 1>& path);
+  using PathWords = std::array<std::uint32_t, kMaxDepth + 1>;
+  bool walk(const NodeRef& node, PathWords& w) const noexcept;
+  void set_word(const NodeRef& node, int depth, PathWords& w, std::uint32_t word);
+  std::uint32_t encode(const std::array<std::uint32_t, 8>& children);
+  void write_group(std::uint8_t* g, const std::array<std::uint32_t, 8>& children) const noexcept;
+  NodeRef erase_path(const NodeRef& node, PathWords& w);
+  std::uint32_t allocate_group(std::size_t size);
+  void free_group(std::uint32_t id);
   void free_subtree(std::uint32_t word);
-  void free_block(std::uint32_t b);
   void update_root_geometry();
 
   std::vector<Vec3> m_vertices;
@@ -270,10 +328,13 @@ class TetHierarchy {
   geometry::SpatialHash m_hash;
 
   std::vector<std::uint32_t> m_root_word;
-  std::vector<std::vector<Block>> m_pages;  // each of kBlocksPerPage blocks, never resized
-  std::size_t m_block_count = 0;            // blocks handed out so far (live + free)
-  std::uint32_t m_free = kNoBlock;
-  std::size_t m_live_blocks = 0;
+  std::vector<std::vector<std::uint8_t>> m_pages;  // each kPageBytes, never resized
+  std::size_t m_page_used = 0;                     // bytes handed out from the last page
+  std::array<std::uint32_t, kMaxGroup + 1> m_free{};  // free list head per group size (kNone: empty)
+  std::size_t m_free_bytes = 0;
+  std::size_t m_internal = 0;
+  std::size_t m_live_groups = 0;
+  std::size_t m_live_group_bytes = 0;
 };
 
 /// Mean-ratio quality 12·(3V)^(2/3) / Σ l² of a tetrahedron (1 for the regular one, 0 when
