@@ -29,9 +29,12 @@ struct World::ImplicitCache {
                                              // diagonal block
   std::vector<std::int32_t> fallback_rows;   // rows whose diagonal block is not SPD
   std::vector<Mat3> fallback_excess;         // their A_ii − ω D̃_i
-  std::vector<Vec3> warm_dv;                 // previous Δv per particle, mm/s
-  std::vector<Vec3> warm_dv_prev;            // the one before
-  int warm_steps = 0;                        // consecutive implicit steps stored (0, 1, 2+)
+  std::vector<std::vector<Vec3>> history;    // previous steps' Δv per particle (mm/s),
+                                             // newest first, ImplicitEulerOptions::
+                                             // warm_start_history of them
+  int warm_steps = 0;                        // consecutive implicit steps stored
+  std::vector<std::vector<Vec3>> basis, abasis;   // projected warm start: orthonormal basis
+                                                  // of the history and A·basis (solver order)
   std::int64_t warm_step = -2;               // World::step_count() at the last solve
   std::vector<Vec3> b, x, r, dir, q, s, t;  // CG work vectors (solver order)
   // SOR-preconditioned CG (sor_kernels.h layout): blocks row-major, vectors 4 doubles a row.
