@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // `ido segment CT --seed X,Y,Z | --seed-voxel I,J,K [--reference HU --tolerance HU]
 //  [--roi x0,y0,z0,x1,y1,z1] -o SURFACE [--mask MASK] [--report R.json]
-//  [--snapshots DIR [--snapshot-every N] [--snapshot-size WxH]]`: balloon segmentation.
+//  [--calcium HU [--calcium-reach MM]] [--snapshots DIR [--snapshot-every N] [--snapshot-size WxH]]`:
+//  balloon segmentation.
 // Presentation only: the method is ido::segment::Balloon.
 #include <algorithm>
 #include <cmath>
@@ -19,7 +20,10 @@
 #include "ido/core/error.h"
 #include "ido/io/mesh_io.h"
 #include "ido/io/volume_io.h"
+#include "ido/geometry/mesh_checks.h"
+#include "ido/geometry/self_intersection.h"
 #include "ido/segment/balloon.h"
+#include "ido/segment/calcification.h"
 #include "ido/viz/renderer.h"
 #include "snapshots.h"
 
@@ -37,6 +41,8 @@ struct SegmentCliOptions {
   std::string mask;
   std::string report;
   bool bone = false;
+  std::optional<double> calcium;
+  double calcium_reach_mm = 4.0;
   int max_iterations = 4000;
   std::string snapshots;
   std::int64_t snapshot_every = 0;  // 0: chosen so that a run gives 15–30 pictures
@@ -154,6 +160,9 @@ void run(const SegmentCliOptions& o, const GlobalOptions& g) {
   if (o.reference.has_value() != o.tolerance.has_value())
     throw InvalidInput("give --reference and --tolerance together (or neither, to estimate both at the seeds)");
   if (o.tolerance && !(*o.tolerance > 0)) throw InvalidInput("--tolerance must be positive");
+  if (o.calcium && !std::isfinite(*o.calcium)) throw InvalidInput("--calcium must be a finite intensity");
+  if (!(o.calcium_reach_mm > 0) || !std::isfinite(o.calcium_reach_mm))
+    throw InvalidInput(fmt::format("--calcium-reach must be a positive length in mm, got {}", o.calcium_reach_mm));
   const std::string ext = std::filesystem::path(o.output).extension().string();
   if (ext != ".stl" && ext != ".ply" && ext != ".obj" && ext != ".vtp")
     throw InvalidInput(fmt::format("{}: the surface output must be .stl, .ply, .obj or .vtp", o.output));
@@ -201,6 +210,32 @@ void run(const SegmentCliOptions& o, const GlobalOptions& g) {
     inflation_steps = stepped.inflation_steps;
   } else {
     result = segment::segment_balloon(ct, seeds, bo, progress.get());
+  }
+  std::optional<segment::CalcificationResult> calcified;
+  if (o.calcium) {
+    const double band_top = result->report.model.reference + result->report.model.tolerance;
+    if (!result->report.model.accept_brighter && *o.calcium <= band_top)
+      throw InvalidInput(fmt::format("--calcium {:g} lies inside the lumen's accepted band (up to {:g}): give a "
+                                     "threshold above it, or contrast would count as plaque",
+                                     *o.calcium, band_top));
+    report(progress.get(), 0.95, "calcification");
+    calcified = segment::add_calcification(result->surface, ct,
+                                           {.threshold = *o.calcium, .max_reach_mm = o.calcium_reach_mm});
+    // The report describes the surface written: recount it.
+    segment::BalloonReport& rep = result->report;
+    result->surface = calcified->surface;
+    const geometry::MeshCheckReport c = geometry::check_mesh(result->surface);
+    rep.vertices = static_cast<std::int64_t>(c.vertices);
+    rep.edges = static_cast<std::int64_t>(c.edges);
+    rep.triangles = static_cast<std::int64_t>(c.triangles);
+    rep.euler_characteristic = c.euler_characteristic;
+    rep.components = c.components;
+    rep.closed = c.closed;
+    rep.manifold = c.edge_manifold && c.vertex_manifold;
+    rep.oriented = c.oriented;
+    rep.volume_mm3 = c.signed_volume_mm3;
+    rep.area_mm2 = c.area_mm2;
+    rep.self_intersections = static_cast<std::int64_t>(geometry::self_intersections(result->surface).size());
   }
   const segment::BalloonResult& r = *result;
   nlohmann::json snapshot_steps = nlohmann::json::array();
@@ -257,6 +292,11 @@ void run(const SegmentCliOptions& o, const GlobalOptions& g) {
         {"leak_warning", rep.leak_warning},
         {"surface", o.output},
         {"mask", o.mask.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.mask)}};
+    if (calcified)
+      j["calcification"] = {{"threshold", *o.calcium},
+                            {"reach_mm", o.calcium_reach_mm},
+                            {"plaque_voxels", calcified->plaque_voxels},
+                            {"plaque_volume_mm3", calcified->plaque_volume_mm3}};
     if (writer) {
       j["inflation_steps"] = inflation_steps;
       j["snapshots"] = writer->files_json();
@@ -272,6 +312,9 @@ void run(const SegmentCliOptions& o, const GlobalOptions& g) {
                 static_cast<long long>(rep.euler_characteristic), rep.volume_mm3, rep.area_mm2,
                 rep.closed ? "closed" : "OPEN", rep.manifold ? "manifold" : "NON-MANIFOLD",
                 static_cast<long long>(rep.self_intersections));
+    if (calcified)
+      std::printf("calcification above %g: %lld plaque voxels (%.1f mm3) added\n", *o.calcium,
+                  static_cast<long long>(calcified->plaque_voxels), calcified->plaque_volume_mm3);
     if (rep.leak_warning) std::printf("warning: the volume was still growing when a safeguard stopped it (leak?)\n");
     if (writer) std::printf("%zu snapshots written to %s\n", writer->files().size(), o.snapshots.c_str());
   }
@@ -287,6 +330,10 @@ void setup(CLI::App& app, const GlobalOptions& g) {
   sub->add_option("--tolerance", opts->tolerance, "accepted departure from the reference (same units)");
   sub->add_option("--roi", opts->roi, "region of interest x0,y0,z0,x1,y1,z1 (world mm), a safeguard");
   sub->add_flag("--bone", opts->bone, "anything brighter than the reference also belongs (bone)");
+  sub->add_option("--calcium", opts->calcium,
+                  "add calcified plaque: voxels brighter than this (e.g. HU, above the lumen's band) touching the "
+                  "lumen, for references that count the vessel wall's calcium");
+  sub->add_option("--calcium-reach", opts->calcium_reach_mm, "how far (mm) plaque may reach from the lumen; default 4");
   sub->add_option("--max-iterations", opts->max_iterations, "safeguard on inflation steps");
   sub->add_option("-o,--output", opts->output, "surface file (.stl .ply .obj .vtp)")->required();
   sub->add_option("--mask", opts->mask, "binary mask on the input grid (1 inside)");

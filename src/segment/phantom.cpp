@@ -236,6 +236,28 @@ Scene make_scene(PhantomKind kind, const PhantomOptions& o) {
                       "vertebral body), with a pedicle-screw drill path";
       break;
     }
+    case PhantomKind::CalcifiedVessel: {
+      // Lumen r 6 mm along z (label 1) with four calcified plaques (r 2.5 mm balls of
+      // cortical HU centred on its wall, label 1: the vessel's reference includes them), and a
+      // bone cylinder (label 2) 2 mm beyond the wall on the side without plaque.
+      s.extent_mm = {52, 40, 48};
+      const double rv = 6.0, rp = 2.5;
+      const Vec3 a(18.1, 20.2, 6.0), b(18.1, 20.2, 42.0);
+      vessel([=](const Vec3& p) { return sd_capsule(p, a, b, rv, rv); });
+      const std::array<std::pair<double, double>, 4> plaques = {{{14.0, 90.0}, {21.0, 160.0}, {28.0, 215.0}, {33.0, 270.0}}};
+      for (const auto& [z, deg] : plaques) {
+        const double t = deg * kPi / 180.0;
+        const Vec3 c(a.x() + rv * std::cos(t), a.y() + rv * std::sin(t), z);
+        s.layers.push_back({[=](const Vec3& p) { return sd_sphere(p, c, rp); }, hu.cortical_hu, 1, 0.0, 0.0});
+      }
+      const double xb = a.x() + rv + 2.0 + 7.0;
+      s.layers.push_back({[=](const Vec3& p) { return sd_capsule(p, Vec3(xb, a.y(), 2.0), Vec3(xb, a.y(), 46.0), 7.0, 7.0); },
+                          hu.cortical_hu, 2, 2.0, hu.cancellous_hu});
+      s.seeds_mm = {Vec3(a.x(), a.y(), 24.0)};
+      s.description = "vessel r 6 mm (label 1) with four calcified plaques r 2.5 mm on its wall (label 1) and a bone "
+                      "cylinder r 7 mm (label 2) 2 mm beside it";
+      break;
+    }
   }
   return s;
 }
@@ -271,6 +293,7 @@ std::string_view phantom_kind_name(PhantomKind kind) {
     case PhantomKind::VesselTree: return "vessel-tree";
     case PhantomKind::Vertebra: return "vertebra";
     case PhantomKind::SpineAorta: return "spine-aorta";
+    case PhantomKind::CalcifiedVessel: return "calcified-vessel";
   }
   return "unknown";
 }
@@ -281,6 +304,7 @@ PhantomKind parse_phantom_kind(std::string_view name) {
   std::string valid;
   std::vector<PhantomKind> kinds = all_phantom_kinds();
   kinds.push_back(PhantomKind::SpineAorta);
+  kinds.push_back(PhantomKind::CalcifiedVessel);
   for (PhantomKind k : kinds) {
     if (n == phantom_kind_name(k)) return k;
     valid += (valid.empty() ? "" : ", ") + std::string(phantom_kind_name(k));

@@ -29,6 +29,8 @@ enum class PhantomKind {
                    ///< (genus 1, χ = 0)
   SpineAorta,      ///< the vertebra (label 2) beside the aorta (label 1, r 9 mm): the pipeline
                    ///< demo's CT; seeds for both, and a pedicle-screw drill path
+  CalcifiedVessel, ///< vessel (r 6 mm) with four calcified plaques on its wall, both label 1,
+                   ///< and a bone cylinder (label 2) 2 mm beside it: for add_calcification
 };
 
 /// All kinds, in declaration order.
