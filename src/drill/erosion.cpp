@@ -133,14 +133,6 @@ std::array<Vec3, 4> child_vertices(const detail::ErosionChildren& k, std::size_t
   return {k.point[pt[0]], k.point[pt[1]], k.point[pt[2]], k.point[pt[3]]};
 }
 
-// Bit s set when child s of the internal node of storage word `word` is an erased leaf.
-std::uint8_t erased_children(const TetHierarchy& h, std::uint32_t word) noexcept {
-  unsigned m = 0;
-  for (int s = 0; s < 8; ++s)
-    if (h.child_word(word, s) == TetHierarchy::kErased) m |= 1U << s;
-  return static_cast<std::uint8_t>(m);
-}
-
 // True when erosion would remove anything below a partly covered full node of geometry x at
 // depth `depth` < `finest` (finest level) without touching the tree: the same decisions as
 // Eroder::enter on its children as full leaves, evaluated on derived geometry only, so a
@@ -290,7 +282,7 @@ Eroder::Enter Eroder::enter(TetHierarchy& h, const NodeRef& node, std::uint32_t 
   }
   m_stack.push_back(Frame{node, word, x, root_face, static_cast<std::int8_t>(finest), 0, refined_here, face_mask});
   m_frame_word[node.depth] = word;
-  make_children(x, m_centre, m_radius, erased_children(h, word), m_children[node.depth]);
+  make_children(x, m_centre, m_radius, h.erased_children(word), m_children[node.depth]);
   return Enter::Pushed;
 }
 
@@ -410,7 +402,7 @@ ErosionStats Eroder::run(TetHierarchy& hierarchy, std::size_t max_node_visits) {
       f.x = hierarchy.world_vertices(f.node);
       m_face_mask[f.node.depth] = f.face_mask;
       m_frame_word[f.node.depth] = f.word;
-      make_children(f.x, m_centre, m_radius, erased_children(hierarchy, f.word), m_children[f.node.depth]);
+      make_children(f.x, m_centre, m_radius, hierarchy.erased_children(f.word), m_children[f.node.depth]);
     }
   }
   const TreeTable& t = TreeTable::get();

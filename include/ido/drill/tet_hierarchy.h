@@ -2,7 +2,6 @@
 #pragma once
 
 #include <array>
-#include <bit>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -151,6 +150,16 @@ class TetHierarchy {
     return static_cast<std::uint32_t>(g[off]) | (static_cast<std::uint32_t>(g[off + 1]) << 8) |
            (static_cast<std::uint32_t>(g[off + 2]) << 16) | (static_cast<std::uint32_t>(g[off + 3]) << 24);
   }
+  /// Bit s set when child s of the internal node of word @p word is an erased leaf.
+  [[nodiscard]] std::uint8_t erased_children(std::uint32_t word) const noexcept {
+    if (word >= kMaskBase) return static_cast<std::uint8_t>(~word & 0xFFU);
+    const std::uint8_t* g = group(word);
+    const unsigned codes = static_cast<unsigned>(g[0]) | (static_cast<unsigned>(g[1]) << 8);
+    const unsigned any = (codes | (codes >> 1)) & 0x5555U;  // bit 2s: code s ≠ erased
+    unsigned m = 0;
+    for (unsigned s = 0; s < 8; ++s) m |= ((any >> (2 * s)) & 1U) << s;
+    return static_cast<std::uint8_t>(~m & 0xFFU);
+  }
   /// The state a storage word stands for.
   [[nodiscard]] static NodeState state_of_word(std::uint32_t word) noexcept {
     return word == kFull ? NodeState::Full : word == kErased ? NodeState::Erased : NodeState::Internal;
@@ -280,11 +289,23 @@ class TetHierarchy {
 
   // Payload bytes of the children whose 2-bit codes are @p codes (1 per mask, 4 per group)
   // plus the 2 code bytes: the offset of the next child's payload.
+  // (Two look-ups in a 256-entry table of the payload bytes of 4 codes: no popcount, which
+  // the baseline x86-64 target lacks.)
   [[nodiscard]] static std::size_t payload_offset(unsigned codes) noexcept {
-    const unsigned hi = (codes >> 1) & 0x5555U;  // codes 2, 3: a payload
-    const unsigned both = hi & codes;            // code 3: 4 bytes
-    return 2 + static_cast<std::size_t>(std::popcount(hi)) + 3 * static_cast<std::size_t>(std::popcount(both));
+    return 2U + kPayload4[codes & 0xFFU] + kPayload4[(codes >> 8) & 0xFFU];
   }
+  static constexpr std::array<std::uint8_t, 256> kPayload4 = [] {
+    std::array<std::uint8_t, 256> t{};
+    for (unsigned c = 0; c < 256; ++c) {
+      unsigned n = 0;
+      for (unsigned k = 0; k < 4; ++k) {
+        const unsigned code = (c >> (2 * k)) & 3U;
+        n += code == kCodeMask ? 1U : code == kCodeGroup ? 4U : 0U;
+      }
+      t[c] = static_cast<std::uint8_t>(n);
+    }
+    return t;
+  }();
   [[nodiscard]] const std::uint8_t* group(std::uint32_t id) const noexcept {
     return m_pages[id >> kPageShift].data() + (id & (kPageBytes - 1U));
   }
