@@ -222,20 +222,9 @@ void run(const SegmentCliOptions& o, const GlobalOptions& g) {
     calcified = segment::add_calcification(result->surface, ct,
                                            {.threshold = *o.calcium, .max_reach_mm = o.calcium_reach_mm});
     // The report describes the surface written: recount it.
-    segment::BalloonReport& rep = result->report;
     result->surface = calcified->surface;
-    const geometry::MeshCheckReport c = geometry::check_mesh(result->surface);
-    rep.vertices = static_cast<std::int64_t>(c.vertices);
-    rep.edges = static_cast<std::int64_t>(c.edges);
-    rep.triangles = static_cast<std::int64_t>(c.triangles);
-    rep.euler_characteristic = c.euler_characteristic;
-    rep.components = c.components;
-    rep.closed = c.closed;
-    rep.manifold = c.edge_manifold && c.vertex_manifold;
-    rep.oriented = c.oriented;
-    rep.volume_mm3 = c.signed_volume_mm3;
-    rep.area_mm2 = c.area_mm2;
-    rep.self_intersections = static_cast<std::int64_t>(geometry::self_intersections(result->surface).size());
+    segment::set_surface_figures(result->report, geometry::check_mesh(result->surface),
+                                 static_cast<std::int64_t>(geometry::self_intersections(result->surface).size()));
   }
   const segment::BalloonResult& r = *result;
   nlohmann::json snapshot_steps = nlohmann::json::array();

@@ -473,6 +473,14 @@ BalloonResult Balloon::run(Progress* progress) {
   const geometry::MeshCheckReport c = geometry::check_mesh(out.surface);
   BalloonReport& r = s.report;
   r.iterations = s.iteration;
+  set_surface_figures(r, c, static_cast<std::int64_t>(pairs.size()));
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - s.start).count();
+  out.report = r;
+  report(progress, 1.0, "done");
+  return out;
+}
+
+void set_surface_figures(BalloonReport& r, const geometry::MeshCheckReport& c, std::int64_t self_intersections) {
   r.volume_mm3 = c.signed_volume_mm3;
   r.area_mm2 = c.area_mm2;
   r.vertices = static_cast<std::int64_t>(c.vertices);
@@ -483,11 +491,7 @@ BalloonResult Balloon::run(Progress* progress) {
   r.closed = c.closed;
   r.manifold = c.edge_manifold && c.vertex_manifold;
   r.oriented = c.oriented;
-  r.self_intersections = static_cast<std::int64_t>(pairs.size());
-  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - s.start).count();
-  out.report = r;
-  report(progress, 1.0, "done");
-  return out;
+  r.self_intersections = self_intersections;
 }
 
 BalloonResult segment_balloon(const image::Volume<float>& ct, const std::vector<Vec3>& seeds_mm,

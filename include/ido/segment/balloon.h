@@ -9,6 +9,7 @@
 
 #include "ido/core/math.h"
 #include "ido/core/progress.h"
+#include "ido/geometry/mesh_checks.h"
 #include "ido/geometry/triangle_mesh.h"
 #include "ido/image/volume.h"
 #include "ido/segment/balloon_forces.h"
@@ -85,6 +86,11 @@ struct BalloonReport {
   bool leak_warning = false;  ///< the volume kept growing until a safeguard stopped it
   std::string stop_reason;    ///< "converged", "max_iterations" or "max_volume"
 };
+
+/// Sets the mesh figures of @p report (volume, area, V/E/F, Euler characteristic, components,
+/// closed / manifold / oriented flags) from @p check, and its self-intersection count.
+void set_surface_figures(BalloonReport& report, const geometry::MeshCheckReport& check,
+                         std::int64_t self_intersections);
 
 /// A surface and its report.
 struct BalloonResult {
