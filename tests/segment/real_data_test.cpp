@@ -2,6 +2,7 @@
 // Balloon segmentation of the real scans in ../shared/data, scored against their reference
 // segmentations over the whole image (issue 4: Dice ≥ 0.93, HD95 ≤ 2 voxels). The
 // references are algorithm outputs (VMTK level set, TotalSegmentator). Labels: data, slow.
+#include <algorithm>
 #include <array>
 #include <cstdlib>
 #include <filesystem>
@@ -146,6 +147,53 @@ INSTANTIATE_TEST_SUITE_P(
         RealCase{"abdomen_dicom", "abdomen-dicom/series", "abdomen-dicom/aorta.nii.gz", false,
                  Vec3(7.32, -145.52, -782.50), false, false}),
     [](const ::testing::TestParamInfo<RealCase>& param_info) { return param_info.param.name; });
+
+// vmtk-aorta's reference is a section of the vessel: it spans grid rows j = 84…178 of 393
+// while the aorta runs on through the image, so no surface that follows the vessel can
+// score Dice ≥ 0.93 over the whole image against it (the whole-image figure above), nor
+// inside the allowed ROI (the reference's box grown by 10 mm adds ≈ 3 200 voxels of true
+// vessel along its axis). Scored within the section the reference covers (both masks cut
+// to its rows along the vessel axis, nothing cut across the vessel), the balloon must meet
+// the issue's figures.
+TEST(RealDataSection, VmtkAortaWithinTheReferenceSection) {
+  IDO_REQUIRE_SHARED_DATA();
+  const RealCase c{"vmtk_aorta", "vmtk-aorta/aorta.mha", "vmtk-aorta/aorta-reference-levelset.mha", true,
+                   Vec3(-219.73, -174.90, 21.00), false, true};
+  IDO_SKIP_UNLESS_ENABLED(c);
+  const auto dir = *test::shared_data_dir();
+  const image::Volume<float> ct = io::read_volume(dir / c.ct);
+  const auto truth = reference_mask(io::read_volume(dir / c.reference), c.level_set);
+  const Outcome o = outcome(c);
+  auto mask = surface_to_mask(o.surface, ct);
+  ASSERT_EQ(mask.size(1), truth.size(1));
+  std::int64_t j_lo = truth.size(1), j_hi = -1;
+  for (std::int64_t k = 0; k < truth.size(2); ++k)
+    for (std::int64_t j = 0; j < truth.size(1); ++j)
+      for (std::int64_t i = 0; i < truth.size(0); ++i)
+        if (truth(i, j, k)) {
+          j_lo = std::min(j_lo, j);
+          j_hi = std::max(j_hi, j);
+        }
+  ASSERT_LE(j_lo, j_hi);
+  // The premise: the reference covers well under half of the vessel axis's rows.
+  EXPECT_LT(double(j_hi - j_lo + 1), 0.5 * double(truth.size(1)));
+  std::int64_t cut = 0;
+  for (std::int64_t k = 0; k < mask.size(2); ++k)
+    for (std::int64_t j = 0; j < mask.size(1); ++j)
+      for (std::int64_t i = 0; i < mask.size(0); ++i)
+        if ((j < j_lo || j > j_hi) && mask(i, j, k)) {
+          mask(i, j, k) = 0;
+          ++cut;
+        }
+  const SegmentationScores s = compare_masks(mask, truth);
+  std::printf("vmtk_aorta within rows j = %lld…%lld: dice %.4f hd95 %.2f mm (%.2f voxels) volume ratio %.3f; %lld "
+              "voxels of the surface's mask lie outside the section\n",
+              static_cast<long long>(j_lo), static_cast<long long>(j_hi), s.dice, s.hd95_mm, s.hd95_mm / o.voxel_mm,
+              s.volume_ratio, static_cast<long long>(cut));
+  RecordProperty("dice_in_section", std::to_string(s.dice));
+  EXPECT_GE(s.dice, 0.93);
+  EXPECT_LE(s.hd95_mm, 2.0 * o.voxel_mm);
+}
 
 }  // namespace
 }  // namespace ido::segment
