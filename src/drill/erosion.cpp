@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <span>
 
 #include "ido/core/error.h"
 
@@ -168,6 +167,13 @@ std::uint32_t node_word(const TetHierarchy& h, const NodeRef& n) noexcept {
   return w;
 }
 
+// Bit s set when child word s is an erased leaf.
+std::uint8_t erased_mask(const std::array<std::uint32_t, 8>& child) noexcept {
+  unsigned m = 0;
+  for (unsigned s = 0; s < 8; ++s) m |= (child[s] == TetHierarchy::kErased ? 1U : 0U) << s;
+  return static_cast<std::uint8_t>(m);
+}
+
 }  // namespace
 
 Eroder::Eroder(const ErosionOptions& options) : m_options(options) {
@@ -255,8 +261,9 @@ Eroder::Enter Eroder::enter(TetHierarchy& h, const NodeRef& node, std::uint32_t 
       return Enter::Abort;
     }
     // The frames below are the node's ancestors: their words give the path.
-    const NodeRef top = h.erase(node, std::span<const std::uint32_t>(m_frame_word.data(), node.depth));
-    refresh_frame_words(h);  // the erase rewrote the ancestors' words (masks, moved groups, merges)
+    m_frame_word[node.depth] = word;
+    const NodeRef top = h.erase_on_path(node, m_frame_word);
+    take_path_words(node);  // the erase rewrote the ancestors' words (masks, moved groups, merges)
     stats.removed_volume_mm3 += material;
     ++stats.nodes_removed;
     // Ancestors merged into erased leaves change what lies across their faces too.
@@ -273,39 +280,48 @@ Eroder::Enter Eroder::enter(TetHierarchy& h, const NodeRef& node, std::uint32_t 
     if (node.depth >= kMaxDepth) return Enter::Done;
     ++m_visits;  // the dry run's visit of the node itself (its tests are the ones above)
     if (!would_remove_below(x, node.depth, finest, m_centre, m_radius, m_visits)) return Enter::Done;
-    if (!h.refine(node)) return Enter::Done;
-    refresh_frame_words(h);  // the parent's word (mask → group) and its ancestors' may change
-    word = node.depth == 0 ? h.root_word(node.root) : h.child_word(m_stack.back().word, node.slot(node.depth));
+    m_frame_word[node.depth] = word;
+    if (!h.refine_on_path(node, m_frame_word)) return Enter::Done;
+    take_path_words(node);  // the parent's word (mask → group) and its ancestors' may change
+    word = m_frame_word[node.depth];
     refined_here = true;
     ++stats.nodes_refined;
     mark(node, face_mask);
   }
-  m_stack.push_back(Frame{node, word, x, root_face, static_cast<std::int8_t>(finest), 0, refined_here, face_mask});
+  m_stack.push_back(Frame{node, word, h.child_words(word), x, root_face, static_cast<std::int8_t>(finest), 0,
+                          refined_here, face_mask});
   m_frame_word[node.depth] = word;
-  make_children(x, m_centre, m_radius, h.erased_children(word), m_children[node.depth]);
+  make_children(x, m_centre, m_radius, erased_mask(m_stack.back().child), m_children[node.depth]);
   return Enter::Pushed;
 }
 
-// Step 7, after the children: a refinement that removed nothing is undone.
+// Step 7, after the children (the frame is popped; the stack holds its ancestors): a
+// refinement that removed nothing — 8 full leaf children — is undone.
 void Eroder::leave(TetHierarchy& h, const Frame& f, ErosionStats& stats) {
-  if (h.state(f.node) == NodeState::Internal && h.coarsen(f.node)) {
+  if (f.word != (TetHierarchy::kMaskBase | 0xFFU)) return;  // what coarsen() requires
+  m_frame_word[f.node.depth] = f.word;
+  if (h.coarsen_on_path(f.node, m_frame_word)) {
     if (f.refined_here) --stats.nodes_refined;
     mark(f.node, f.face_mask);
-    refresh_frame_words(h);
+    take_path_words(f.node);
   }
 }
 
-// Re-reads the words of the frames on the stack top-down (frame k is at depth k, the child of
-// frame k − 1) after a change of the tree: a change rewrites the words of the changed node's
-// ancestors (a mask bit, a group moved to its new size, a merge into an erased leaf). A
-// frame whose node merged reads kErased, so its remaining children read kErased as well.
-void Eroder::refresh_frame_words(const TetHierarchy& h) noexcept {
-  std::uint32_t w = 0;
+// After a change of the tree at the node below the top frame (or the top frame's own node
+// after its pop), m_frame_word holds the path's new words (TetHierarchy::*_on_path): a change
+// rewrites only the words of the changed node and its ancestors (a mask bit, a group moved
+// to its new size, a merge into an erased leaf), never another child's. Frame k is at depth
+// k; its word and its child on the path are taken from m_frame_word. A frame whose node
+// merged reads kErased, and so do all its children (they were erased: it merged).
+void Eroder::take_path_words(const NodeRef& changed) noexcept {
   for (std::size_t k = 0; k < m_stack.size(); ++k) {
     Frame& f = m_stack[k];
-    w = k == 0 ? h.root_word(f.node.root) : h.child_word(w, f.node.slot(f.node.depth));
-    f.word = w;
-    m_frame_word[f.node.depth] = w;
+    f.word = m_frame_word[k];
+    if (f.word == TetHierarchy::kErased) {
+      f.child.fill(TetHierarchy::kErased);
+    } else {
+      f.child[static_cast<std::size_t>(changed.slot(static_cast<int>(k) + 1))] = m_frame_word[k + 1];
+    }
   }
 }
 
@@ -396,13 +412,14 @@ ErosionStats Eroder::run(TetHierarchy& hierarchy, std::size_t max_node_visits) {
           keep == 0 ? node_word(hierarchy, f.node) : hierarchy.child_word(m_stack[keep - 1].word, f.node.slot(f.node.depth));
       if (TetHierarchy::state_of_word(w) != NodeState::Internal) break;
       f.word = w;
+      f.child = hierarchy.child_words(w);
     }
     m_stack.resize(keep);
     for (auto& f : m_stack) {
       f.x = hierarchy.world_vertices(f.node);
       m_face_mask[f.node.depth] = f.face_mask;
       m_frame_word[f.node.depth] = f.word;
-      make_children(f.x, m_centre, m_radius, hierarchy.erased_children(f.word), m_children[f.node.depth]);
+      make_children(f.x, m_centre, m_radius, erased_mask(f.child), m_children[f.node.depth]);
     }
   }
   const TreeTable& t = TreeTable::get();
@@ -430,10 +447,9 @@ ErosionStats Eroder::run(TetHierarchy& hierarchy, std::size_t max_node_visits) {
         }
         const auto s = static_cast<std::size_t>(f.next_child++);
         const detail::ErosionChildren& kids = m_children[f.node.depth];
-        // f.word is current: every change of the tree re-reads the frames' words
-        // (refresh_frame_words); after a merge of f's node it is kErased, and so are the
-        // children read from it, as they are in the tree.
-        const std::uint32_t cw = hierarchy.child_word(f.word, static_cast<int>(s));
+        // f.child is current: every change of the tree updates the frames' words
+        // (take_path_words); after a merge of f's node they read kErased, as in the tree.
+        const std::uint32_t cw = f.child[s];
         if (cw == TetHierarchy::kErased || kids.beyond[s]) {
           ++m_visits;  // what enter() does for an erased child or one the sphere misses
           continue;

@@ -316,35 +316,52 @@ std::uint32_t TetHierarchy::encode(const std::array<std::uint32_t, 8>& children)
 // w holds the current words of the path) to @p word, and rewrites the ancestors' storage up
 // the path as far as it changes: a mask parent takes the bit (or becomes a group when the
 // child becomes internal), a group parent is rewritten in place when the child's payload
-// keeps its size, else re-encoded at its new size (a mask when no internal child is left),
-// which changes the parent's own word in the grandparent, and so on. The old word's own
-// storage is the caller's (free_subtree before, when it goes). w is updated.
+// keeps its size (its code and payload bytes only), else re-encoded at its new size (a mask
+// when no internal child is left), which changes the parent's own word in the grandparent,
+// and so on. The old word's own storage is the caller's (free_subtree before, when it goes).
+// w is updated.
 void TetHierarchy::set_word(const NodeRef& node, int depth, PathWords& w, std::uint32_t word) {
+  auto code_of = [](std::uint32_t x) {
+    return x == kFull ? kCodeFull : x == kErased ? kCodeErased : x >= kMaskBase ? kCodeMask : kCodeGroup;
+  };
   for (int d = depth;; --d) {
     const auto du = static_cast<std::size_t>(d);
-    const std::uint32_t old = w[du];
     w[du] = word;
     if (d == 0) {
       m_root_word[node.root] = word;
       return;
     }
     const std::uint32_t pw = w[du - 1];
-    const auto s = static_cast<std::size_t>(node.slot(d));
-    std::array<std::uint32_t, 8> children{};
-    for (std::size_t c = 0; c < 8; ++c) children[c] = child_word(pw, static_cast<int>(c));
-    children[s] = word;
-    std::uint32_t parent_word = 0;
-    if (!is_group(pw)) {
-      parent_word = encode(children);
-    } else {
-      auto payload = [](std::uint32_t x) { return x >= kErased ? 0 : x >= kMaskBase ? 1 : 4; };
-      if (payload(old) == payload(word)) {
-        write_group(group(pw), children);  // same size: in place, the parent's word stays
+    const auto s = static_cast<unsigned>(node.slot(d));
+    if (!is_group(pw) && word >= kErased) {
+      // A mask parent whose child stays a leaf: the child's bit (the encoding of its 8 leaves).
+      word = word == kFull ? (pw | (1U << s)) : (pw & ~(1U << s));
+      continue;
+    }
+    if (is_group(pw)) {
+      std::uint8_t* g = group(pw);
+      const unsigned codes = static_cast<unsigned>(g[0]) | (static_cast<unsigned>(g[1]) << 8);
+      const unsigned old_code = (codes >> (2 * s)) & 3U, code = code_of(word);
+      static_assert(kCodeErased < kCodeMask && kCodeFull < kCodeMask && kCodeMask < kCodeGroup);
+      const bool same_size = old_code == code || (old_code < kCodeMask && code < kCodeMask);
+      if (same_size) {
+        // In place (the bytes write_group would write): the parent's word stays.
+        const unsigned nc = (codes & ~(3U << (2 * s))) | (code << (2 * s));
+        g[0] = static_cast<std::uint8_t>(nc & 0xFFU);
+        g[1] = static_cast<std::uint8_t>(nc >> 8);
+        const std::size_t off = payload_offset(codes & ((1U << (2 * s)) - 1U));
+        if (code == kCodeMask) {
+          g[off] = static_cast<std::uint8_t>(word & 0xFFU);
+        } else if (code == kCodeGroup) {
+          for (std::size_t k = 0; k < 4; ++k) g[off + k] = static_cast<std::uint8_t>(word >> (8 * k));
+        }
         return;
       }
-      parent_word = encode(children);
-      free_group(pw);
     }
+    std::array<std::uint32_t, 8> children = child_words(pw);
+    children[s] = word;
+    const std::uint32_t parent_word = encode(children);
+    if (is_group(pw)) free_group(pw);
     word = parent_word;
   }
 }
@@ -398,6 +415,22 @@ NodeRef TetHierarchy::erase_path(const NodeRef& node, PathWords& w) {
     set_word(node, n.depth, w, kErased);
   }
   return n;
+}
+
+bool TetHierarchy::refine_on_path(const NodeRef& node, PathWords& w) {
+  if (node.depth >= kMaxDepth || w[node.depth] != kFull) return false;
+  set_word(node, node.depth, w, kMaskBase | 0xFFU);
+  ++m_internal;
+  return true;
+}
+
+NodeRef TetHierarchy::erase_on_path(const NodeRef& node, PathWords& w) { return erase_path(node, w); }
+
+bool TetHierarchy::coarsen_on_path(const NodeRef& node, PathWords& w) {
+  if (w[node.depth] != (kMaskBase | 0xFFU)) return false;
+  set_word(node, node.depth, w, kFull);
+  --m_internal;
+  return true;
 }
 
 bool TetHierarchy::coarsen(const NodeRef& node) {

@@ -580,6 +580,103 @@ TEST(TetHierarchy, EraseWithAncestorWordsEqualsEraseFromTheRoot) {
   }
 }
 
+TEST(TetHierarchy, ChangesOnHeldPathWordsEqualChangesFromTheRoot) {
+  // Random refine / erase / coarsen on two copies: in one through refine(node), erase(node)
+  // and coarsen(node), in the other through the *_on_path calls with the path words read
+  // top-down. Same results, same trees, same storage; the path words handed back are the
+  // ones a fresh walk reads, and child_words() agrees with child_word().
+  TetHierarchy a(make_cube12(10.0));
+  for (std::uint32_t r = 0; r < 12; ++r) refine_all(a, r, 2);
+  TetHierarchy b = a;
+  std::mt19937 rng(23);
+  std::size_t ops[3] = {0, 0, 0}, merges = 0;
+  auto path_of = [](const TetHierarchy& h, const NodeRef& n) {
+    TetHierarchy::PathWords w{};
+    w[0] = h.root_word(n.root);
+    for (int d = 1; d <= n.depth; ++d) w[static_cast<std::size_t>(d)] = h.child_word(w[static_cast<std::size_t>(d - 1)], n.slot(d));
+    return w;
+  };
+  for (int i = 0; i < 4000; ++i) {
+    const auto r = static_cast<std::uint32_t>(rng() % 12);
+    std::vector<std::pair<NodeRef, NodeState>> leaves;
+    a.for_each_leaf(r, [&](const NodeRef& n, NodeState s) { leaves.emplace_back(n, s); });
+    const auto [leaf, st] = leaves[rng() % leaves.size()];
+    TetHierarchy::PathWords w = path_of(b, leaf);
+    const int op = static_cast<int>(rng() % 3);
+    if (op == 0 && st == NodeState::Full && leaf.depth < 6) {
+      ASSERT_TRUE(a.refine(leaf));
+      ASSERT_TRUE(b.refine_on_path(leaf, w));
+    } else if (op == 1 && st == NodeState::Full) {
+      // The leaf, and half the time its full siblings after it (so blocks merge).
+      std::vector<NodeRef> go{leaf};
+      if (leaf.depth > 0 && rng() % 2 == 0)
+        for (int c = 0; c < 8; ++c)
+          if (leaf.parent().child(c) != leaf && a.state(leaf.parent().child(c)) == NodeState::Full)
+            go.push_back(leaf.parent().child(c));
+      for (const NodeRef& n : go) {
+        TetHierarchy::PathWords wn = path_of(b, n);
+        const NodeRef ta = a.erase(n);
+        ASSERT_EQ(b.erase_on_path(n, wn), ta);
+        if (ta.depth < n.depth) ++merges;
+        const TetHierarchy::PathWords fresh = path_of(b, n);
+        for (int d = 0; d <= ta.depth; ++d) ASSERT_EQ(wn[static_cast<std::size_t>(d)], fresh[static_cast<std::size_t>(d)]);
+        for (int d = ta.depth; d <= n.depth; ++d) ASSERT_EQ(wn[static_cast<std::size_t>(d)], TetHierarchy::kErased);
+      }
+      ++ops[op];
+      continue;
+    } else if (op == 2 && leaf.depth > 0) {
+      const NodeRef p = leaf.parent();
+      w = path_of(b, p);
+      const bool can = a.coarsen(p);
+      ASSERT_EQ(b.coarsen_on_path(p, w), can);
+      if (!can) continue;
+      ASSERT_EQ(w, path_of(b, p));
+      ++ops[2];
+      continue;
+    } else {
+      continue;
+    }
+    ++ops[op];
+    // The words handed back are the current ones (kErased below a merged node).
+    const TetHierarchy::PathWords fresh = path_of(b, leaf);
+    for (int d = 0; d <= leaf.depth; ++d) {
+      const auto du = static_cast<std::size_t>(d);
+      ASSERT_EQ(w[du], fresh[du]) << "op " << i << " depth " << d;
+      if (fresh[du] == TetHierarchy::kErased) break;
+    }
+  }
+  EXPECT_GT(ops[0], 300U);
+  EXPECT_GT(ops[1], 300U);
+  EXPECT_GT(ops[2], 20U);
+  EXPECT_GT(merges, 10U);
+  EXPECT_EQ(a.internal_nodes(), b.internal_nodes());
+  EXPECT_EQ(a.live_group_bytes(), b.live_group_bytes());
+  EXPECT_EQ(a.free_bytes(), b.free_bytes());
+  EXPECT_EQ(a.node_storage_bytes(), b.node_storage_bytes());
+  for (std::uint32_t r = 0; r < 12; ++r) {
+    std::vector<std::pair<NodeRef, NodeState>> la, lb;
+    a.for_each_leaf(r, [&](const NodeRef& n, NodeState s) { la.emplace_back(n, s); });
+    b.for_each_leaf(r, [&](const NodeRef& n, NodeState s) { lb.emplace_back(n, s); });
+    ASSERT_EQ(la, lb) << "root " << r;
+    // child_words() against child_word() on every internal node.
+    struct Item {
+      NodeRef node;
+      std::uint32_t word;
+    };
+    std::vector<Item> stack{{NodeRef{r, 0, 0}, b.root_word(r)}};
+    while (!stack.empty()) {
+      const Item it = stack.back();
+      stack.pop_back();
+      if (TetHierarchy::state_of_word(it.word) != NodeState::Internal) continue;
+      const auto words = b.child_words(it.word);
+      for (int c = 0; c < 8; ++c) {
+        ASSERT_EQ(words[static_cast<std::size_t>(c)], b.child_word(it.word, c));
+        stack.push_back({it.node.child(c), words[static_cast<std::size_t>(c)]});
+      }
+    }
+  }
+}
+
 TEST(TetHierarchy, LeafVolumesSumToRootAfterDeepRefinement) {
   TetHierarchy h(make_cube(2.0));
   std::mt19937 rng(5);

@@ -121,7 +121,8 @@ class Eroder {
   // One level of the explicit depth-first traversal: a partly covered node being descended.
   struct Frame {
     NodeRef node;
-    std::uint32_t word = 0;  // the node's storage word, re-read after every change of the tree
+    std::uint32_t word = 0;  // the node's storage word, kept current after every change of the tree
+    std::array<std::uint32_t, 8> child{};  // its children's words, decoded once at the push, kept current
     std::array<Vec3, 4> x;
     std::array<std::int8_t, 4> root_face;
     std::int8_t finest = 0;
@@ -136,7 +137,7 @@ class Eroder {
               double d2, std::uint8_t inside, int finest, const std::array<std::int8_t, 4>& root_face,
               ErosionStats& stats);
   void leave(TetHierarchy& h, const Frame& f, ErosionStats& stats);
-  void refresh_frame_words(const TetHierarchy& h) noexcept;
+  void take_path_words(const NodeRef& changed) noexcept;
   void mark(const NodeRef& node, std::uint8_t faces);
   void start_sphere(const TetHierarchy& h, const Sphere& s);
   void drop_all(TetHierarchy& h, ErosionStats& stats);
@@ -163,7 +164,9 @@ class Eroder {
   std::vector<std::uint32_t> m_slot;  // root → index in m_changed
   std::array<std::uint8_t, kMaxDepth + 1> m_face_mask{};  // root faces touched per level of the current path
   std::array<detail::ErosionChildren, kMaxDepth + 1> m_children;  // children of the frame at each depth
-  std::array<std::uint32_t, kMaxDepth + 1> m_frame_word{};  // storage word of the frame at each depth
+  // Storage words of the current path: the frame at each depth, and the node being entered
+  // below the top frame (what TetHierarchy::*_on_path read and update).
+  TetHierarchy::PathWords m_frame_word{};
 };
 
 }  // namespace ido::drill

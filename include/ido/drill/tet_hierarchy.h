@@ -150,6 +150,33 @@ class TetHierarchy {
     return static_cast<std::uint32_t>(g[off]) | (static_cast<std::uint32_t>(g[off + 1]) << 8) |
            (static_cast<std::uint32_t>(g[off + 2]) << 16) | (static_cast<std::uint32_t>(g[off + 3]) << 24);
   }
+  /// The words of the 8 children of the internal node of word @p word (child_word(word, s)
+  /// for s = 0…7), decoded in one pass over its group.
+  [[nodiscard]] std::array<std::uint32_t, 8> child_words(std::uint32_t word) const noexcept {
+    std::array<std::uint32_t, 8> c{};
+    if (word >= kMaskBase) {
+      for (unsigned s = 0; s < 8; ++s) c[s] = word >= kErased ? word : ((word >> s) & 1U) != 0 ? kFull : kErased;
+      return c;
+    }
+    const std::uint8_t* g = group(word);
+    const unsigned codes = static_cast<unsigned>(g[0]) | (static_cast<unsigned>(g[1]) << 8);
+    std::size_t off = 2;
+    for (unsigned s = 0; s < 8; ++s) {
+      const unsigned code = (codes >> (2 * s)) & 3U;
+      if (code == kCodeErased) {
+        c[s] = kErased;
+      } else if (code == kCodeFull) {
+        c[s] = kFull;
+      } else if (code == kCodeMask) {
+        c[s] = kMaskBase | g[off++];
+      } else {
+        c[s] = static_cast<std::uint32_t>(g[off]) | (static_cast<std::uint32_t>(g[off + 1]) << 8) |
+               (static_cast<std::uint32_t>(g[off + 2]) << 16) | (static_cast<std::uint32_t>(g[off + 3]) << 24);
+        off += 4;
+      }
+    }
+    return c;
+  }
   /// Bit s set when child s of the internal node of word @p word is an erased leaf.
   [[nodiscard]] std::uint8_t erased_children(std::uint32_t word) const noexcept {
     if (word >= kMaskBase) return static_cast<std::uint8_t>(~word & 0xFFU);
@@ -182,6 +209,19 @@ class TetHierarchy {
   /// Undoes a refinement that removed nothing: an internal node whose 8 children are all
   /// full leaves becomes a full leaf again. Returns true if it did.
   bool coarsen(const NodeRef& node);
+
+  /// Storage words of a node's path: [d] is the word of its ancestor at depth d (d < depth)
+  /// and [depth] its own, as a top-down traversal holds them.
+  using PathWords = std::array<std::uint32_t, kMaxDepth + 1>;
+  /// As refine(node), erase(node) and coarsen(node) for a caller that holds the node's path
+  /// words in @p w (precondition, not checked: w[d] is the current word for every d ≤
+  /// node.depth, each ancestor's internal — a top-down traversal that keeps them up to
+  /// date), so nothing is walked down from the root. On return w holds the path's new words
+  /// (kErased from the topmost merged node down); the words of the path's other children are
+  /// unchanged by any change, so a caller holding them need re-read only w.
+  bool refine_on_path(const NodeRef& node, PathWords& w);
+  NodeRef erase_on_path(const NodeRef& node, PathWords& w);
+  bool coarsen_on_path(const NodeRef& node, PathWords& w);
 
   /// The node's vertices as root barycentric keys.
   [[nodiscard]] NodeGeometry geometry(const NodeRef& node) const noexcept;
@@ -323,7 +363,6 @@ class TetHierarchy {
 
   [[nodiscard]] Location descend(std::uint32_t root, const std::array<double, 4>& root_lambda) const noexcept;
   [[nodiscard]] bool outside_root_box(std::size_t r, const Vec3& p_mm) const noexcept;
-  using PathWords = std::array<std::uint32_t, kMaxDepth + 1>;
   bool walk(const NodeRef& node, PathWords& w) const noexcept;
   void set_word(const NodeRef& node, int depth, PathWords& w, std::uint32_t word);
   std::uint32_t encode(const std::array<std::uint32_t, 8>& children);
