@@ -365,17 +365,38 @@ struct WalkTables {
   const FaceMapTables& maps = face_map_tables();
 };
 
-// What lies across face f of child slot s of an internal node at depth pdepth (storage word
-// pword), given what lies across each face of the node (`pacr`); written into @p out field by
-// field (a returned temporary, built piecewise on the stack and copied, cost a
-// store-forwarding stall per call in the walk's inner loop).
-void child_across(const TetHierarchy& h, const WalkTables& wt, int pdepth, std::uint32_t pword, int s, int f,
+// The child words of an internal node and of the internal nodes across its faces at its own
+// depth, decoded once per node of the walk (TetHierarchy::child_words) for its 8 children's
+// 32 look-ups across their faces.
+struct WalkChildren {
+  std::array<std::uint32_t, 8> own;
+  std::array<std::array<std::uint32_t, 8>, 4> across;  // [f]: valid when across_internal bit f
+};
+
+// Fills @p wc for the internal node at depth @p depth of word @p word, face neighbours @p acr:
+// its own child words, and those of each internal node across at its depth (what
+// child_across reads).
+void decode_children(const TetHierarchy& h, int depth, std::uint32_t word, const std::array<WalkAcross, 4>& acr,
+                     WalkChildren& wc) {
+  wc.own = h.child_words(word);
+  for (std::size_t f = 0; f < 4; ++f) {
+    const WalkAcross& a = acr[f];
+    if (!a.boundary && a.depth >= depth && TetHierarchy::state_of_word(a.word) == NodeState::Internal)
+      wc.across[f] = h.child_words(a.word);
+  }
+}
+
+// What lies across face f of child slot s of an internal node at depth pdepth, given what
+// lies across each face of the node (`pacr`) and the decoded child words `wc`; written into
+// @p out field by field (a returned temporary, built piecewise on the stack and copied, cost
+// a store-forwarding stall per call in the walk's inner loop).
+void child_across(const WalkTables& wt, int pdepth, const WalkChildren& wc, int s, int f,
                   const std::array<WalkAcross, 4>& pacr, WalkAcross& out) {
   const auto su = static_cast<std::size_t>(s);
   const auto fu = static_cast<std::size_t>(f);
   const auto link = wt.tree.face_link[su][fu];
   if (link.sibling >= 0) {
-    out.word = h.child_word(pword, link.sibling);
+    out.word = wc.own[static_cast<std::size_t>(link.sibling)];
     out.depth = static_cast<std::uint8_t>(pdepth + 1);
     out.map = wt.maps.sibling[su][fu];
     out.boundary = false;
@@ -392,7 +413,7 @@ void child_across(const TetHierarchy& h, const WalkTables& wt, int pdepth, std::
     out = WalkAcross{TetHierarchy::kErased, 0, -1, true};
     return;
   }
-  out.word = h.child_word(pa.word, st.child);
+  out.word = wc.across[static_cast<std::size_t>(link.parent_face)][static_cast<std::size_t>(st.child)];
   out.depth = static_cast<std::uint8_t>(pa.depth + 1);
   out.map = st.map;
   out.boundary = false;
@@ -570,14 +591,16 @@ void visit(const TetHierarchy& h, const WalkTables& wt, const RootKeys& rk, int 
     emit_leaf(h, wt, rk, g, acr, out);
     return;
   }
+  WalkChildren wc;
+  decode_children(h, depth, word, acr, wc);
   for (int c = 0; c < 8; ++c) {
-    const std::uint32_t cw = h.child_word(word, c);
+    const std::uint32_t cw = wc.own[static_cast<std::size_t>(c)];
     if (cw == TetHierarchy::kErased) {
       ++visits;
       continue;
     }
     std::array<WalkAcross, 4> cacr;
-    for (int f = 0; f < 4; ++f) child_across(h, wt, depth, word, c, f, acr, cacr[static_cast<std::size_t>(f)]);
+    for (int f = 0; f < 4; ++f) child_across(wt, depth, wc, c, f, acr, cacr[static_cast<std::size_t>(f)]);
     const auto cu = static_cast<std::size_t>(c);
     if (cw == TetHierarchy::kFull) {
       ++visits;
@@ -856,9 +879,11 @@ std::uint32_t BoundarySurface::rebuild_range(const TetHierarchy& h, std::uint32_
     while (d < level && TetHierarchy::state_of_word(word) == NodeState::Internal) {
       const int s = static_cast<int>((c >> (3 * (level - d - 1))) & 7U);
       std::array<WalkAcross, 4> cacr;
-      for (int f = 0; f < 4; ++f) child_across(h, wt, d, word, s, f, acr, cacr[static_cast<std::size_t>(f)]);
+      WalkChildren wc;
+      decode_children(h, d, word, acr, wc);
+      for (int f = 0; f < 4; ++f) child_across(wt, d, wc, s, f, acr, cacr[static_cast<std::size_t>(f)]);
       node = node.child(s);
-      word = h.child_word(word, s);
+      word = wc.own[static_cast<std::size_t>(s)];
       acr = cacr;
       ++d;
     }
