@@ -365,32 +365,21 @@ struct WalkTables {
   const FaceMapTables& maps = face_map_tables();
 };
 
-// The child words of an internal node and of the internal nodes across its faces at its own
-// depth, decoded once per node of the walk (TetHierarchy::child_words) for its 8 children's
-// 32 look-ups across their faces.
+// The child words of an internal node (decoded once per node of the walk,
+// TetHierarchy::child_words) and of the internal nodes across its faces at its own depth
+// (decoded when a child first looks across that face), for its 8 children's 32 look-ups.
 struct WalkChildren {
   std::array<std::uint32_t, 8> own;
-  std::array<std::array<std::uint32_t, 8>, 4> across;  // [f]: valid when across_internal bit f
+  std::array<std::array<std::uint32_t, 8>, 4> across;  // [f]: decoded on first use (bit f of `ready`)
+  unsigned ready = 0;
 };
 
-// Fills @p wc for the internal node at depth @p depth of word @p word, face neighbours @p acr:
-// its own child words, and those of each internal node across at its depth (what
-// child_across reads).
-void decode_children(const TetHierarchy& h, int depth, std::uint32_t word, const std::array<WalkAcross, 4>& acr,
-                     WalkChildren& wc) {
-  wc.own = h.child_words(word);
-  for (std::size_t f = 0; f < 4; ++f) {
-    const WalkAcross& a = acr[f];
-    if (!a.boundary && a.depth >= depth && TetHierarchy::state_of_word(a.word) == NodeState::Internal)
-      wc.across[f] = h.child_words(a.word);
-  }
-}
 
 // What lies across face f of child slot s of an internal node at depth pdepth, given what
 // lies across each face of the node (`pacr`) and the decoded child words `wc`; written into
 // @p out field by field (a returned temporary, built piecewise on the stack and copied, cost
 // a store-forwarding stall per call in the walk's inner loop).
-void child_across(const WalkTables& wt, int pdepth, const WalkChildren& wc, int s, int f,
+void child_across(const TetHierarchy& h, const WalkTables& wt, int pdepth, WalkChildren& wc, int s, int f,
                   const std::array<WalkAcross, 4>& pacr, WalkAcross& out) {
   const auto su = static_cast<std::size_t>(s);
   const auto fu = static_cast<std::size_t>(f);
@@ -413,7 +402,12 @@ void child_across(const WalkTables& wt, int pdepth, const WalkChildren& wc, int 
     out = WalkAcross{TetHierarchy::kErased, 0, -1, true};
     return;
   }
-  out.word = wc.across[static_cast<std::size_t>(link.parent_face)][static_cast<std::size_t>(st.child)];
+  const auto pf = static_cast<std::size_t>(link.parent_face);
+  if (((wc.ready >> pf) & 1U) == 0) {
+    wc.across[pf] = h.child_words(pa.word);
+    wc.ready |= 1U << pf;
+  }
+  out.word = wc.across[pf][static_cast<std::size_t>(st.child)];
   out.depth = static_cast<std::uint8_t>(pa.depth + 1);
   out.map = st.map;
   out.boundary = false;
@@ -592,7 +586,7 @@ void visit(const TetHierarchy& h, const WalkTables& wt, const RootKeys& rk, int 
     return;
   }
   WalkChildren wc;
-  decode_children(h, depth, word, acr, wc);
+  wc.own = h.child_words(word);
   for (int c = 0; c < 8; ++c) {
     const std::uint32_t cw = wc.own[static_cast<std::size_t>(c)];
     if (cw == TetHierarchy::kErased) {
@@ -600,7 +594,7 @@ void visit(const TetHierarchy& h, const WalkTables& wt, const RootKeys& rk, int 
       continue;
     }
     std::array<WalkAcross, 4> cacr;
-    for (int f = 0; f < 4; ++f) child_across(wt, depth, wc, c, f, acr, cacr[static_cast<std::size_t>(f)]);
+    for (int f = 0; f < 4; ++f) child_across(h, wt, depth, wc, c, f, acr, cacr[static_cast<std::size_t>(f)]);
     const auto cu = static_cast<std::size_t>(c);
     if (cw == TetHierarchy::kFull) {
       ++visits;
@@ -880,8 +874,8 @@ std::uint32_t BoundarySurface::rebuild_range(const TetHierarchy& h, std::uint32_
       const int s = static_cast<int>((c >> (3 * (level - d - 1))) & 7U);
       std::array<WalkAcross, 4> cacr;
       WalkChildren wc;
-      decode_children(h, d, word, acr, wc);
-      for (int f = 0; f < 4; ++f) child_across(wt, d, wc, s, f, acr, cacr[static_cast<std::size_t>(f)]);
+      wc.own = h.child_words(word);
+      for (int f = 0; f < 4; ++f) child_across(h, wt, d, wc, s, f, acr, cacr[static_cast<std::size_t>(f)]);
       node = node.child(s);
       word = wc.own[static_cast<std::size_t>(s)];
       acr = cacr;

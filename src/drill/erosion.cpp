@@ -136,11 +136,12 @@ std::array<Vec3, 4> child_vertices(const detail::ErosionChildren& k, std::size_t
 // depth `depth` < `finest` (finest level) without touching the tree: the same decisions as
 // Eroder::enter on its children as full leaves, evaluated on derived geometry only, so a
 // partly covered leaf is refined only when a descendant will actually go (no
-// refine-then-undo). Adds the nodes it tests to `visits`.
+// refine-then-undo). Adds the nodes it tests to `visits`. @p k receives x's children and
+// their tests (make_children with nothing skipped): after the refinement they are the new
+// frame's, all full.
 // NOLINTNEXTLINE(misc-no-recursion): depth ≤ kMaxDepth
 bool would_remove_below(const std::array<Vec3, 4>& x, int depth, int finest, const Vec3& c, double r,
-                        std::size_t& visits) {
-  detail::ErosionChildren k;
+                        std::size_t& visits, detail::ErosionChildren& k) {
   make_children(x, c, r, 0, k);
   const double r2 = r * r;
   for (std::size_t s = 0; s < 8; ++s) {
@@ -153,7 +154,8 @@ bool would_remove_below(const std::array<Vec3, 4>& x, int depth, int finest, con
       if (k.d2[s] <= r2) return true;  // the centroid is inside
       continue;
     }
-    if (would_remove_below(ch, depth + 1, finest, c, r, visits)) return true;
+    detail::ErosionChildren below;
+    if (would_remove_below(ch, depth + 1, finest, c, r, visits, below)) return true;
   }
   return false;
 }
@@ -279,7 +281,10 @@ Eroder::Enter Eroder::enter(TetHierarchy& h, const NodeRef& node, std::uint32_t 
     // go stays a leaf.
     if (node.depth >= kMaxDepth) return Enter::Done;
     ++m_visits;  // the dry run's visit of the node itself (its tests are the ones above)
-    if (!would_remove_below(x, node.depth, finest, m_centre, m_radius, m_visits)) return Enter::Done;
+    // Its children's tests go where the frame pushed below keeps them (m_children at the
+    // node's depth is free: the frame of the node's parent keeps its own one level up).
+    if (!would_remove_below(x, node.depth, finest, m_centre, m_radius, m_visits, m_children[node.depth]))
+      return Enter::Done;
     m_frame_word[node.depth] = word;
     if (!h.refine_on_path(node, m_frame_word)) return Enter::Done;
     take_path_words(node);  // the parent's word (mask → group) and its ancestors' may change
@@ -291,7 +296,8 @@ Eroder::Enter Eroder::enter(TetHierarchy& h, const NodeRef& node, std::uint32_t 
   m_stack.push_back(Frame{node, word, h.child_words(word), x, root_face, static_cast<std::int8_t>(finest), 0,
                           refined_here, face_mask});
   m_frame_word[node.depth] = word;
-  make_children(x, m_centre, m_radius, erased_mask(m_stack.back().child), m_children[node.depth]);
+  // A node refined here has 8 full children, whose tests the dry run made.
+  if (!refined_here) make_children(x, m_centre, m_radius, erased_mask(m_stack.back().child), m_children[node.depth]);
   return Enter::Pushed;
 }
 

@@ -250,7 +250,7 @@ std::uint32_t TetHierarchy::allocate_group(std::size_t size) {
           m_free[tail] = tid;
         }
       }
-      m_pages.emplace_back(kPageBytes);  // a new page; none moves
+      m_pages.emplace_back(kPageBytes + kPagePad);  // a new page; none moves
       m_page_used = 0;
     }
     id = static_cast<std::uint32_t>(((m_pages.size() - 1) << kPageShift) | m_page_used);

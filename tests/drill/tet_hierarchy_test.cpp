@@ -278,7 +278,7 @@ TEST(TetHierarchy, GroupsSpanningSeveralPagesKeepTheirWordsThroughErasureReuseAn
   EXPECT_EQ(h.live_groups(), 12U * (1U + 8U + 64U + 512U));
   EXPECT_GT(page_bytes(h), 5U * TetHierarchy::kPageBytes);
   // Every page byte handed out is a live group or on a free list.
-  EXPECT_EQ(h.node_storage_bytes() - page_bytes(h), h.node_storage_capacity_bytes() - h.page_count() * TetHierarchy::kPageBytes);
+  EXPECT_EQ(h.node_storage_bytes() - page_bytes(h), h.node_storage_capacity_bytes() - h.page_count() * (TetHierarchy::kPageBytes + TetHierarchy::kPagePad));
   std::size_t leaves = 0;
   double sum = 0.0;
   for (std::size_t r = 0; r < h.root_count(); ++r)
@@ -315,7 +315,7 @@ TEST(TetHierarchy, GroupsSpanningSeveralPagesKeepTheirWordsThroughErasureReuseAn
   EXPECT_EQ(h.live_group_bytes(), 11U * 7602U);
   EXPECT_GE(h.free_bytes(), 7602U);
   EXPECT_TRUE(test::rel_near(h.material_volume(), 1000.0 - h.root_volume(11), 1e-10));
-  EXPECT_EQ(h.node_storage_bytes() - page_bytes(h), h.node_storage_capacity_bytes() - h.page_count() * TetHierarchy::kPageBytes);
+  EXPECT_EQ(h.node_storage_bytes() - page_bytes(h), h.node_storage_capacity_bytes() - h.page_count() * (TetHierarchy::kPageBytes + TetHierarchy::kPagePad));
   // The copy kept its own words.
   EXPECT_TRUE(test::rel_near(copy.material_volume(), 1000.0, 1e-10));
   EXPECT_EQ(copy.internal_nodes(), 12U * 4681U);
@@ -493,7 +493,7 @@ TEST(TetHierarchy, RandomRefineEraseCoarsenEqualTheReferenceTree) {
     ASSERT_EQ(h.internal_nodes(), internal) << "op " << op;
     ASSERT_EQ(h.live_group_bytes(), group_bytes) << "op " << op;
     ASSERT_EQ(h.live_groups(), groups) << "op " << op;
-    ASSERT_EQ(h.node_storage_bytes() - page_bytes(h), h.node_storage_capacity_bytes() - h.page_count() * TetHierarchy::kPageBytes)
+    ASSERT_EQ(h.node_storage_bytes() - page_bytes(h), h.node_storage_capacity_bytes() - h.page_count() * (TetHierarchy::kPageBytes + TetHierarchy::kPagePad))
         << "op " << op;
     for (const NodeRef& n : nodes) {
       const ModelNode* m = model_find(root, n);

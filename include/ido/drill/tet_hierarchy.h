@@ -144,14 +144,10 @@ class TetHierarchy {
     const std::uint8_t* g = group(word);
     const unsigned codes = static_cast<unsigned>(g[0]) | (static_cast<unsigned>(g[1]) << 8);
     const unsigned code = (codes >> (2 * s)) & 3U;
-    if (code < kCodeMask) return code == kCodeFull ? kFull : kErased;
-    const std::size_t off = payload_offset(codes & ((1U << (2 * s)) - 1U));
-    if (code == kCodeMask) return kMaskBase | g[off];
-    return static_cast<std::uint32_t>(g[off]) | (static_cast<std::uint32_t>(g[off + 1]) << 8) |
-           (static_cast<std::uint32_t>(g[off + 2]) << 16) | (static_cast<std::uint32_t>(g[off + 3]) << 24);
+    return word_of_code(code, g + payload_offset(codes & ((1U << (2 * s)) - 1U)));
   }
   /// The words of the 8 children of the internal node of word @p word (child_word(word, s)
-  /// for s = 0…7), decoded in one pass over its group.
+  /// for s = 0…7), decoded in one pass over its group without a branch per child.
   [[nodiscard]] std::array<std::uint32_t, 8> child_words(std::uint32_t word) const noexcept {
     std::array<std::uint32_t, 8> c{};
     if (word >= kMaskBase) {
@@ -163,17 +159,8 @@ class TetHierarchy {
     std::size_t off = 2;
     for (unsigned s = 0; s < 8; ++s) {
       const unsigned code = (codes >> (2 * s)) & 3U;
-      if (code == kCodeErased) {
-        c[s] = kErased;
-      } else if (code == kCodeFull) {
-        c[s] = kFull;
-      } else if (code == kCodeMask) {
-        c[s] = kMaskBase | g[off++];
-      } else {
-        c[s] = static_cast<std::uint32_t>(g[off]) | (static_cast<std::uint32_t>(g[off + 1]) << 8) |
-               (static_cast<std::uint32_t>(g[off + 2]) << 16) | (static_cast<std::uint32_t>(g[off + 3]) << 24);
-        off += 4;
-      }
+      c[s] = word_of_code(code, g + off);
+      off += ((code >> 1) & 1U) * (1U + 3U * (code & 1U));  // payload bytes: 0, 0, 1, 4
     }
     return c;
   }
@@ -294,9 +281,10 @@ class TetHierarchy {
   [[nodiscard]] std::size_t node_storage_bytes() const noexcept {
     return m_root_word.size() * sizeof(std::uint32_t) + page_table_bytes() + handed_out_bytes();
   }
-  /// As node_storage_bytes() with the whole of every page allocated (the memory reserved).
+  /// As node_storage_bytes() with the whole of every page allocated, kPagePad included (the
+  /// memory reserved).
   [[nodiscard]] std::size_t node_storage_capacity_bytes() const noexcept {
-    return m_root_word.size() * sizeof(std::uint32_t) + page_table_bytes() + m_pages.size() * kPageBytes;
+    return m_root_word.size() * sizeof(std::uint32_t) + page_table_bytes() + m_pages.size() * (kPageBytes + kPagePad);
   }
   /// node_storage_bytes() / node_count(): free lists and allocator slack included.
   [[nodiscard]] double bytes_per_node() const noexcept {
@@ -319,6 +307,9 @@ class TetHierarchy {
   static constexpr std::uint32_t kMaskBase = 0xFFFFFE00U;
   /// Bytes per page of child groups.
   static constexpr std::uint32_t kPageBytes = 1U << 14;
+  /// Bytes allocated beyond each page's kPageBytes, never handed out: a group's decoding reads
+  /// 4 bytes at every child's payload offset, up to 3 beyond the group's end.
+  static constexpr std::uint32_t kPagePad = 3;
 
  private:
   static constexpr unsigned kCodeErased = 0, kCodeFull = 1, kCodeMask = 2, kCodeGroup = 3;
@@ -346,6 +337,16 @@ class TetHierarchy {
     }
     return t;
   }();
+  // The word a child of code @p code stands for, its payload at @p p: the 4 bytes at p are
+  // read whatever the code (a page has kPagePad bytes beyond its last group), and the word
+  // is selected, not branched on (the codes of a group are not predictable).
+  [[nodiscard]] static std::uint32_t word_of_code(unsigned code, const std::uint8_t* p) noexcept {
+    const std::uint32_t v = static_cast<std::uint32_t>(p[0]) | (static_cast<std::uint32_t>(p[1]) << 8) |
+                            (static_cast<std::uint32_t>(p[2]) << 16) | (static_cast<std::uint32_t>(p[3]) << 24);
+    const std::uint32_t leaf = kErased | (code & 1U);  // kCodeErased → kErased, kCodeFull → kFull
+    const std::uint32_t inner = code == kCodeMask ? (kMaskBase | (v & 0xFFU)) : v;
+    return code < kCodeMask ? leaf : inner;
+  }
   [[nodiscard]] const std::uint8_t* group(std::uint32_t id) const noexcept {
     return m_pages[id >> kPageShift].data() + (id & (kPageBytes - 1U));
   }
@@ -388,7 +389,7 @@ class TetHierarchy {
   geometry::SpatialHash m_hash;
 
   std::vector<std::uint32_t> m_root_word;
-  std::vector<std::vector<std::uint8_t>> m_pages;  // each kPageBytes, never resized
+  std::vector<std::vector<std::uint8_t>> m_pages;  // each kPageBytes + kPagePad, never resized
   std::size_t m_page_used = 0;                     // bytes handed out from the last page
   std::array<std::uint32_t, kMaxGroup + 1> m_free{};  // free list head per group size (kNone: empty)
   std::size_t m_free_bytes = 0;
