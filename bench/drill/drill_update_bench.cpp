@@ -17,6 +17,7 @@
 #include "ido/drill/shapes.h"
 #include "ido/drill/simulator.h"
 #include "ido/drill/tet_hierarchy.h"
+#include "drill_trace.h"
 
 #ifdef IDO_BENCH_OPENVDB
 #include <openvdb/openvdb.h>
@@ -26,45 +27,13 @@ namespace {
 
 using namespace ido;
 using namespace ido::drill;
-
-constexpr double kBlockCell = 4.0;  // root cube edge (mm)
-const Vec3 kBlock(32.0, 32.0, 16.0);
-constexpr double kRadius = 2.0;
-constexpr double kSpeedMmPerS = 20.0;  // tool speed along the trace
-constexpr int kUpdates = 1000;         // collision updates (1 ms apart)
-
-// The trace: a plunge 3 mm into the top face, then a curve, one pose per millisecond.
-Vec3 trace(int i) {
-  const double t = i * 1e-3;
-  const double s = kSpeedMmPerS * t;  // arc length (mm)
-  if (s < 3.0) return {8.0, 16.0, kBlock.z() + kRadius - s};
-  const double u = s - 3.0;
-  return {8.0 + u, 16.0 + 4.0 * std::sin(u / 4.0), kBlock.z() + kRadius - 3.0};
-}
-
-// CPU time of the calling thread (s): robust against other processes on a loaded machine.
-double thread_cpu_s() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
+using namespace ido::drill::bench;
 
 // CPU time of the whole process (s).
 double process_cpu_s() {
   timespec ts{};
   clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
-
-double leaf_edge(int depth) { return kBlockCell * std::sqrt(3.0) / std::ldexp(1.0, depth); }
-
-/// Counters PREFIXp50_ms, PREFIXp99_ms and (with @p with_max) PREFIXmax_ms of times in seconds.
-void add_ms_counters(benchmark::State& state, const std::string& prefix, const std::vector<double>& seconds,
-                     bool with_max = true) {
-  const auto p = percentiles(seconds);
-  state.counters[prefix + "p50_ms"] = p.p50 * 1e3;
-  state.counters[prefix + "p99_ms"] = p.p99 * 1e3;
-  if (with_max) state.counters[prefix + "max_ms"] = p.max * 1e3;
 }
 
 // One collision update as the simulator's collision thread does it: collide the 1000 burr

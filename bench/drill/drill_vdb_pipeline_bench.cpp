@@ -38,41 +38,13 @@
 
 #include "ido/drill/simulator.h"
 #include "ido/drill/tool.h"
+#include "drill_trace.h"
 
 namespace {
 
 using namespace ido;
 using namespace ido::drill;
-
-// The trace and block of drill_update_bench.cpp (same numbers; kept in step by hand).
-constexpr double kBlockCell = 4.0;  // root cube edge (mm)
-const Vec3 kBlock(32.0, 32.0, 16.0);
-constexpr double kRadius = 2.0;
-constexpr double kSpeedMmPerS = 20.0;
-constexpr int kUpdates = 1000;
-
-Vec3 trace(int i) {
-  const double t = i * 1e-3;
-  const double s = kSpeedMmPerS * t;
-  if (s < 3.0) return {8.0, 16.0, kBlock.z() + kRadius - s};
-  const double u = s - 3.0;
-  return {8.0 + u, 16.0 + 4.0 * std::sin(u / 4.0), kBlock.z() + kRadius - 3.0};
-}
-
-double thread_cpu_s() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
-
-double leaf_edge(int depth) { return kBlockCell * std::sqrt(3.0) / std::ldexp(1.0, depth); }
-
-void add_ms_counters(benchmark::State& state, const std::string& prefix, const std::vector<double>& seconds) {
-  const auto p = percentiles(seconds);
-  state.counters[prefix + "p50_ms"] = p.p50 * 1e3;
-  state.counters[prefix + "p99_ms"] = p.p99 * 1e3;
-  state.counters[prefix + "max_ms"] = p.max * 1e3;
-}
+using namespace ido::drill::bench;
 
 using Quad = std::array<openvdb::Vec3s, 4>;
 
