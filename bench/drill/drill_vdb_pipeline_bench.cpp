@@ -111,16 +111,11 @@ void BM_OpenVdbPipeline(benchmark::State& state) {
   openvdb::initialize();
   const tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
   const int depth = static_cast<int>(state.range(0));
-  const double h = leaf_edge(depth) / std::sqrt(3.0) * std::sqrt(2.0);  // voxel edge ~ leaf mean edge
+  const double h = voxel_edge(depth);
   std::vector<double> cpu_times, collide_cpu, remove_cpu, surface_cpu;
   double dirty_sum = 0.0, copied_sum = 0.0, quads = 0.0, matches = 0.0, mem = 0.0;
   for (auto _ : state) {
-    auto grid = openvdb::BoolGrid::create(false);
-    grid->setTransform(openvdb::math::Transform::createLinearTransform(h));
-    const openvdb::Coord hi(static_cast<int>(kBlock.x() / h) - 1, static_cast<int>(kBlock.y() / h) - 1,
-                            static_cast<int>(kBlock.z() / h) - 1);
-    grid->denseFill(openvdb::CoordBBox(openvdb::Coord(0, 0, 0), hi), true, true);
-    grid->tree().prune();
+    auto grid = make_block_grid(h);
     BrickMeshes bricks;
     mesh_quads(*grid, h, [&](const openvdb::Coord& b, const Quad& q) { bricks[b].push_back(q); });
     const Tool tool({.burr_radius_mm = kRadius, .sample_count = 1000});
@@ -136,43 +131,24 @@ void BM_OpenVdbPipeline(benchmark::State& state) {
       const double c0 = thread_cpu_s();
       // Collision: the burr samples against the grid.
       const Vec3 c = trace(i);
-      int inside = 0;
       Vec3 dir = Vec3::Zero();
-      for (const auto& s : tool.burr_samples()) {
-        const Vec3 p = c + s;
-        if (acc.isValueOn(openvdb::Coord(static_cast<int>(std::floor(p.x() / h)), static_cast<int>(std::floor(p.y() / h)),
-                                         static_cast<int>(std::floor(p.z() / h))))) {
-          ++inside;
-          dir -= s;
-        }
-      }
+      const int inside = samples_inside(acc, tool, c, h, &dir);
       benchmark::DoNotOptimize(inside);
       benchmark::DoNotOptimize(dir);
       const double c1 = thread_cpu_s();
       // Removal: voxels inside each sub-step sphere; the bricks whose quads can change.
       dirty.clear();
-      const int n = std::max(1, static_cast<int>(std::ceil((c - last).norm() / (0.25 * kRadius))));
+      const int n = substep_count(last, c);
       for (int k = 1; k <= n; ++k) {
-        const Vec3 q = last + (c - last) * (double(k) / n);
-        const int r = static_cast<int>(std::ceil(kRadius / h)) + 1;
-        const openvdb::Coord ctr(static_cast<int>(std::floor(q.x() / h)), static_cast<int>(std::floor(q.y() / h)),
-                                 static_cast<int>(std::floor(q.z() / h)));
-        for (int dx = -r; dx <= r; ++dx)
-          for (int dy = -r; dy <= r; ++dy)
-            for (int dz = -r; dz <= r; ++dz) {
-              const openvdb::Coord v = ctr.offsetBy(dx, dy, dz);
-              const Vec3 centre((v.x() + 0.5) * h, (v.y() + 0.5) * h, (v.z() + 0.5) * h);
-              if ((centre - q).squaredNorm() <= kRadius * kRadius && acc.isValueOn(v)) {
-                acc.setValueOff(v, false);
-                // Every brick within kReach voxels of v (its quads may read v).
-                for (int ex = -kReach; ex <= kReach; ex += kReach)
-                  for (int ey = -kReach; ey <= kReach; ey += kReach)
-                    for (int ez = -kReach; ez <= kReach; ez += kReach) {
-                      const openvdb::Coord b = brick_of(v.offsetBy(ex, ey, ez));
-                      if (dirty.empty() || dirty.back() != b) dirty.push_back(b);
-                    }
+        switch_off_sphere(acc, last + (c - last) * (double(k) / n), h, [&](const openvdb::Coord& v) {
+          // Every brick within kReach voxels of v (its quads may read v).
+          for (int ex = -kReach; ex <= kReach; ex += kReach)
+            for (int ey = -kReach; ey <= kReach; ey += kReach)
+              for (int ez = -kReach; ez <= kReach; ez += kReach) {
+                const openvdb::Coord b = brick_of(v.offsetBy(ex, ey, ez));
+                if (dirty.empty() || dirty.back() != b) dirty.push_back(b);
               }
-            }
+        });
       }
       last = c;
       const double c2 = thread_cpu_s();

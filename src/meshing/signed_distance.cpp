@@ -95,12 +95,19 @@ image::Volume<float> signed_distance(const geometry::TriangleMesh& surface,
           const Tri& t = surface.triangles[tris[q]];
           const Vec3 &a = surface.vertices[t[0]], &b = surface.vertices[t[1]], &c = surface.vertices[t[2]];
           const Box& bx = boxes[q];
+          // The distance to the triangle is at least the distance to its plane: a point whose
+          // plane distance already exceeds what its slot holds cannot lower it (the margin
+          // covers the rounding of both), so the closest-point query is skipped there.
+          const Vec3 nrm = (b - a).cross(c - a);
+          const double nrm_len = nrm.norm();
+          const Vec3 unit = nrm_len > 0 ? Vec3(nrm / nrm_len) : Vec3::Zero();
           for (std::int64_t k = std::max(k0, bx.lo[2]); k <= std::min(k1 - 1, bx.hi[2]); ++k)
             for (std::int64_t j = bx.lo[1]; j <= bx.hi[1]; ++j)
               for (std::int64_t i = bx.lo[0]; i <= bx.hi[0]; ++i) {
                 const Vec3 p = grid.index_to_world(Vec3(double(i), double(j), double(k)));
-                const double d = (closest_point_on_triangle_mm(p, a, b, c) - p).norm();
                 float& slot = dist[out.linear_index(i, j, k)];
+                if (std::abs(unit.dot(p - a)) > double(slot) * (1.0 + 1e-6) + 1e-9) continue;
+                const double d = (closest_point_on_triangle_mm(p, a, b, c) - p).norm();
                 if (d < slot) slot = static_cast<float>(d);
               }
         }

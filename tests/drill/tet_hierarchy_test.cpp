@@ -204,6 +204,10 @@ TEST(TreeTable, PointLocationAgreesWithBruteForceOnAMillionPoints) {
 
 // Bytes of page storage handed out: node storage without the root words and page table.
 std::size_t page_bytes(const TetHierarchy& h) { return h.live_group_bytes() + h.free_bytes(); }
+// Bytes of the pages allocated, padding included.
+std::size_t page_capacity(const TetHierarchy& h) {
+  return h.page_count() * (TetHierarchy::kPageBytes + TetHierarchy::kPagePad);
+}
 
 TEST(TetHierarchy, RefineEraseMergeAndReuseMemory) {
   TetHierarchy h(make_cube12(10.0));
@@ -278,7 +282,7 @@ TEST(TetHierarchy, GroupsSpanningSeveralPagesKeepTheirWordsThroughErasureReuseAn
   EXPECT_EQ(h.live_groups(), 12U * (1U + 8U + 64U + 512U));
   EXPECT_GT(page_bytes(h), 5U * TetHierarchy::kPageBytes);
   // Every page byte handed out is a live group or on a free list.
-  EXPECT_EQ(h.node_storage_bytes() - page_bytes(h), h.node_storage_capacity_bytes() - h.page_count() * (TetHierarchy::kPageBytes + TetHierarchy::kPagePad));
+  EXPECT_EQ(h.node_storage_bytes() - page_bytes(h), h.node_storage_capacity_bytes() - page_capacity(h));
   std::size_t leaves = 0;
   double sum = 0.0;
   for (std::size_t r = 0; r < h.root_count(); ++r)
@@ -315,7 +319,7 @@ TEST(TetHierarchy, GroupsSpanningSeveralPagesKeepTheirWordsThroughErasureReuseAn
   EXPECT_EQ(h.live_group_bytes(), 11U * 7602U);
   EXPECT_GE(h.free_bytes(), 7602U);
   EXPECT_TRUE(test::rel_near(h.material_volume(), 1000.0 - h.root_volume(11), 1e-10));
-  EXPECT_EQ(h.node_storage_bytes() - page_bytes(h), h.node_storage_capacity_bytes() - h.page_count() * (TetHierarchy::kPageBytes + TetHierarchy::kPagePad));
+  EXPECT_EQ(h.node_storage_bytes() - page_bytes(h), h.node_storage_capacity_bytes() - page_capacity(h));
   // The copy kept its own words.
   EXPECT_TRUE(test::rel_near(copy.material_volume(), 1000.0, 1e-10));
   EXPECT_EQ(copy.internal_nodes(), 12U * 4681U);
@@ -493,7 +497,7 @@ TEST(TetHierarchy, RandomRefineEraseCoarsenEqualTheReferenceTree) {
     ASSERT_EQ(h.internal_nodes(), internal) << "op " << op;
     ASSERT_EQ(h.live_group_bytes(), group_bytes) << "op " << op;
     ASSERT_EQ(h.live_groups(), groups) << "op " << op;
-    ASSERT_EQ(h.node_storage_bytes() - page_bytes(h), h.node_storage_capacity_bytes() - h.page_count() * (TetHierarchy::kPageBytes + TetHierarchy::kPagePad))
+    ASSERT_EQ(h.node_storage_bytes() - page_bytes(h), h.node_storage_capacity_bytes() - page_capacity(h))
         << "op " << op;
     for (const NodeRef& n : nodes) {
       const ModelNode* m = model_find(root, n);
@@ -593,7 +597,10 @@ TEST(TetHierarchy, ChangesOnHeldPathWordsEqualChangesFromTheRoot) {
   auto path_of = [](const TetHierarchy& h, const NodeRef& n) {
     TetHierarchy::PathWords w{};
     w[0] = h.root_word(n.root);
-    for (int d = 1; d <= n.depth; ++d) w[static_cast<std::size_t>(d)] = h.child_word(w[static_cast<std::size_t>(d - 1)], n.slot(d));
+    for (int d = 1; d <= n.depth; ++d) {
+      const auto du = static_cast<std::size_t>(d);
+      w[du] = h.child_word(w[du - 1], n.slot(d));
+    }
     return w;
   };
   for (int i = 0; i < 4000; ++i) {
@@ -619,7 +626,8 @@ TEST(TetHierarchy, ChangesOnHeldPathWordsEqualChangesFromTheRoot) {
         ASSERT_EQ(b.erase_on_path(n, wn), ta);
         if (ta.depth < n.depth) ++merges;
         const TetHierarchy::PathWords fresh = path_of(b, n);
-        for (int d = 0; d <= ta.depth; ++d) ASSERT_EQ(wn[static_cast<std::size_t>(d)], fresh[static_cast<std::size_t>(d)]);
+        for (int d = 0; d <= ta.depth; ++d)
+          ASSERT_EQ(wn[static_cast<std::size_t>(d)], fresh[static_cast<std::size_t>(d)]);
         for (int d = ta.depth; d <= n.depth; ++d) ASSERT_EQ(wn[static_cast<std::size_t>(d)], TetHierarchy::kErased);
       }
       ++ops[op];

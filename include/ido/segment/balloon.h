@@ -38,7 +38,7 @@ struct BalloonOptions {
   BalloonForceWeights weights;          ///< inflation and curvature stiffness
   double tangential_weight = 0.3;       ///< tangential umbrella relaxation per step
   int remesh_interval = 3;              ///< refine every this many steps
-  int intersection_interval = 10;       ///< look for self-intersections every this many steps
+  int intersection_interval = 10;       ///< look for (and repair) self-intersections every this many steps, in the edge stage too
   int max_iterations = 4000;            ///< safeguard
   double max_volume_mm3 = INFINITY;     ///< safeguard; reaching it raises the leak warning
   /// Optional region of interest (world mm, axis-aligned {min, max}): outside it the
