@@ -135,9 +135,22 @@ std::optional<double> edge_offset_along_normal(const image::Volume<float>& smoot
     return model.accept_brighter ? -I : intensity_departure(I, model);
   };
   double best = -INFINITY, first_t = 0, last_t = 0;
+  // The window's inner end at step s is often, bit for bit, the outer end at step s − r
+  // (w = r steps): that departure is reused, not sampled again (same offsets, same values).
+  const int r = static_cast<int>(std::lround(w / step_mm));
+  thread_local std::vector<double> outer_t, outer_d;  // outer end's offset and departure per step
+  outer_t.resize(std::size_t(2 * steps + 1));
+  outer_d.resize(std::size_t(2 * steps + 1));
   for (int s = -steps; s <= steps; ++s) {
     const double t = s * step_mm;
-    const double rise = (depart(t + 0.5 * w) - depart(t - 0.5 * w)) / w;
+    const double t_out = t + 0.5 * w, t_in = t - 0.5 * w;
+    const double d_out = depart(t_out);
+    const std::size_t q = std::size_t(s + steps);
+    outer_t[q] = t_out;
+    outer_d[q] = d_out;
+    const bool reuse = r >= 1 && s - r >= -steps && outer_t[q - std::size_t(r)] == t_in;
+    const double d_in = reuse ? outer_d[q - std::size_t(r)] : depart(t_in);
+    const double rise = (d_out - d_in) / w;
     if (s == -steps || rise > best + 1e-9 * std::abs(best)) {
       best = rise;
       first_t = last_t = t;
