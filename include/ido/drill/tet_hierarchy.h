@@ -308,8 +308,9 @@ class TetHierarchy {
   /// Bytes per page of child groups.
   static constexpr std::uint32_t kPageBytes = 1U << 14;
   /// Bytes allocated beyond each page's kPageBytes, never handed out: a group's decoding reads
-  /// 4 bytes at every child's payload offset, up to 3 beyond the group's end.
-  static constexpr std::uint32_t kPagePad = 3;
+  /// 4 bytes at every child's payload offset, which may be the group's end (so bytes
+  /// end … end + 3 are read).
+  static constexpr std::uint32_t kPagePad = 4;
 
  private:
   static constexpr unsigned kCodeErased = 0, kCodeFull = 1, kCodeMask = 2, kCodeGroup = 3;
