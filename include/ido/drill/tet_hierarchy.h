@@ -164,16 +164,6 @@ class TetHierarchy {
     }
     return c;
   }
-  /// Bit s set when child s of the internal node of word @p word is an erased leaf.
-  [[nodiscard]] std::uint8_t erased_children(std::uint32_t word) const noexcept {
-    if (word >= kMaskBase) return static_cast<std::uint8_t>(~word & 0xFFU);
-    const std::uint8_t* g = group(word);
-    const unsigned codes = static_cast<unsigned>(g[0]) | (static_cast<unsigned>(g[1]) << 8);
-    const unsigned any = (codes | (codes >> 1)) & 0x5555U;  // bit 2s: code s ≠ erased
-    unsigned m = 0;
-    for (unsigned s = 0; s < 8; ++s) m |= ((any >> (2 * s)) & 1U) << s;
-    return static_cast<std::uint8_t>(~m & 0xFFU);
-  }
   /// The state a storage word stands for.
   [[nodiscard]] static NodeState state_of_word(std::uint32_t word) noexcept {
     return word == kFull ? NodeState::Full : word == kErased ? NodeState::Erased : NodeState::Internal;
