@@ -302,6 +302,72 @@ TEST(BoundarySurface, VListsEqualAPointLocationReference) {
   }
 }
 
+// Every face of every root, canonically rotated, sorted: the surface as a multiset of exact
+// keys.
+std::vector<FaceKeys> face_multiset(const BoundarySurface& s) {
+  std::vector<FaceKeys> out;
+  for (std::size_t r = 0; r < s.root_count(); ++r)
+    for (const auto& f : s.v_list(r)) out.push_back(canonical(f));
+  std::sort(out.begin(), out.end(), face_less);
+  return out;
+}
+
+TEST(BoundarySurface, IncrementalUnitRebuildsEqualAFullRebuild) {
+  // Random drilling sequences (burrs of varied size, so leaves of different depths meet
+  // across faces and neighbours of a changed sub-tree need their face splits redone), the
+  // v_lists updated from the changed nodes only, with and without a visit budget, at several
+  // chunk and unit levels: after every pass (flushed) the surface equals a fresh full build,
+  // as a multiset of exact face keys and root by root in the same order; the leaf indices
+  // kept beside the faces are counted (4 bytes a face, capacity included).
+  struct Levels {
+    int chunk, unit;
+  };
+  std::mt19937 rng(41);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::size_t compared = 0, partial_updates = 0;
+  for (const Levels lv : {Levels{0, 0}, Levels{1, 2}, Levels{2, 4}, Levels{3, 6}, Levels{2, 10}}) {
+    for (int trial = 0; trial < 2; ++trial) {
+      TetHierarchy h(trial == 0 ? make_block({10, 8, 6}, 2.0) : make_cube12(10.0));
+      BoundarySurface surface(h, {.chunk_level = lv.chunk, .unit_level = lv.unit});
+      const std::size_t budget = trial == 0 ? 0 : 250;
+      Eroder eroder({.removal_rate_mm3_per_s = 0.0, .max_depth = 4 + (lv.unit + trial) % 2, .max_node_visits = 600});
+      for (int step = 0; step < 12; ++step) {
+        const Vec3 c(10 * u(rng), 8 * u(rng), 6 * u(rng));
+        eroder.enqueue(c, 0.4 + 1.8 * u(rng), 1.0, 0.01);
+        while (eroder.has_pending()) {
+          (void)eroder.run(h, 600);
+          surface.update(h, eroder.changed_nodes(), budget);
+          eroder.clear_changed_roots();
+          partial_updates += surface.has_pending() ? 1 : 0;
+        }
+        surface.flush(h);
+        ASSERT_FALSE(surface.has_pending());
+        if (step % 2 == 0) continue;
+        const BoundarySurface fresh(h, {.chunk_level = lv.chunk, .unit_level = lv.unit});
+        const auto mine = face_multiset(surface), ref = face_multiset(fresh);
+        ASSERT_EQ(mine.size(), ref.size()) << "levels " << lv.chunk << "/" << lv.unit << " trial " << trial << " step " << step;
+        for (std::size_t i = 0; i < ref.size(); ++i)
+          ASSERT_TRUE(mine[i] == ref[i]) << "levels " << lv.chunk << "/" << lv.unit << " trial " << trial << " step " << step;
+        for (std::size_t r = 0; r < h.root_count(); ++r)  // (a root refined once keeps its chunks)
+          ASSERT_TRUE(surface.v_list(r) == fresh.v_list(r))
+              << "levels " << lv.chunk << "/" << lv.unit << " trial " << trial << " step " << step << " root " << r;
+        EXPECT_GE(surface.leaf_index_bytes(), 4 * surface.face_count());
+        compared += ref.size();
+      }
+      // Still closed and enclosing the leaf volume.
+      const auto check = check_surface(assemble_surface(surface.v_lists(), h.vertices()));
+      EXPECT_EQ(check.boundary_edges, 0U);
+      EXPECT_EQ(check.unbalanced_edges, 0U);
+      EXPECT_TRUE(test::rel_near(check.volume, h.material_volume(), 1e-9));
+    }
+  }
+  std::printf("%zu faces compared, %zu updates left units waiting\n", compared, partial_updates);
+  EXPECT_GT(compared, 20000U);
+  EXPECT_GT(partial_updates, 10U) << "the v_list budget never ran out: the test does not test it";
+  EXPECT_THROW(BoundarySurface(TetHierarchy(make_cube12(10.0)), {.chunk_level = 3, .unit_level = 2}), InvalidInput);
+  EXPECT_THROW(BoundarySurface(TetHierarchy(make_cube12(10.0)), {.chunk_level = 3, .unit_level = kMaxDepth + 1}), InvalidInput);
+}
+
 // Reference erosion written from the rules alone, the slow way: node states read from the
 // root (TetHierarchy::state) and geometry from the path (world_vertices) at every node, and
 // only the bounding-sphere rejection. It must leave exactly the tree the Eroder leaves
