@@ -4,9 +4,13 @@
 #include "dicom_writer.h"
 
 #include <itkGDCMImageIO.h>
+#include <itkGDCMSeriesFileNames.h>
+#include <itkImageSeriesReader.h>
 #include <itkImage.h>
 #include <itkImageFileWriter.h>
 #include <itkMetaDataObject.h>
+
+#include <stdexcept>
 
 namespace ido::test {
 
@@ -44,6 +48,24 @@ void write_tiny_dicom_series(const std::filesystem::path& dir, const std::string
     writer->SetFileName((dir / (prefix + std::to_string(s) + ".dcm")).string());
     writer->Update();
   }
+}
+
+ItkSeries read_series_with_itk(const std::filesystem::path& dir) {
+  using Image = itk::Image<float, 3>;
+  auto names = itk::GDCMSeriesFileNames::New();
+  names->SetUseSeriesDetails(false);
+  names->SetDirectory(dir.string());
+  const auto uids = names->GetSeriesUIDs();
+  if (uids.size() != 1) throw std::runtime_error("read_series_with_itk: expected one series in " + dir.string());
+  auto reader = itk::ImageSeriesReader<Image>::New();
+  reader->SetImageIO(itk::GDCMImageIO::New());
+  reader->SetFileNames(names->GetFileNames(uids.front()));
+  reader->Update();
+  const auto sz = reader->GetOutput()->GetLargestPossibleRegion().GetSize();
+  ItkSeries out{sz[0], sz[1], sz[2], {}};
+  const float* p = reader->GetOutput()->GetBufferPointer();
+  out.voxels.assign(p, p + sz[0] * sz[1] * sz[2]);
+  return out;
 }
 
 }  // namespace ido::test
