@@ -3,6 +3,7 @@
 // isotropic and anisotropic spacing. Dice ≥ 0.97, Euler characteristic = truth's, closed,
 // manifold, no self-intersection (issue 4 §Required accuracy).
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -27,7 +28,11 @@ TEST_P(PhantomAccuracy, DiceEulerAndValidSurface) {
   PhantomOptions po;
   po.spacing_mm = c.anisotropic ? Vec3(0.9, 0.9, 1.4) : Vec3(1.0, 1.0, 1.0);
   po.blur_voxels = 0.7;
+  // The suite's noise realisation is seed 11; IDO_PHANTOM_NOISE_SEED=N runs the same
+  // checks on another one (bench/results/segment-seeds.md lists seeds 1–5: several rows
+  // fall below 0.97 there, so seed 11 is not a worst case).
   po.seed = 11;
+  if (const char* env = std::getenv("IDO_PHANTOM_NOISE_SEED")) po.seed = std::strtoull(env, nullptr, 10);
   Phantom clean = make_phantom(c.kind, po);
   po.noise_hu = 0.2 * clean.contrast_hu;
   const Phantom p = make_phantom(c.kind, po);
