@@ -570,36 +570,23 @@ void emit_leaf(const TetHierarchy& h, const WalkTables& wt, const RootKeys& rk, 
   }
 }
 
-// Depth-first index at kMaxDepth of the first leaf position below a node: its path's slots,
-// most significant first. A node at depth d covers [index, index + leaf_span(d)).
-constexpr std::uint32_t leaf_span(int depth) noexcept { return 1U << (3 * (kMaxDepth - depth)); }
-constexpr std::uint32_t kAllLeaves = leaf_span(0);
-std::uint32_t leaf_index(const NodeRef& n) noexcept {
-  std::uint32_t idx = 0;
-  for (int l = 1; l <= n.depth; ++l) idx |= static_cast<std::uint32_t>(n.slot(l)) << (3 * (kMaxDepth - l));
-  return idx;
-}
-
 // Emits the visible faces of the full leaves of the subtree of n (storage word `word`,
-// geometry g, face neighbours acr, depth-first leaf index idx), walking top-down so every
-// node's neighbours, their states and its geometry come from its parent's in O(1). Erased
-// children and full children with four full neighbours cost one visit each and no further
-// work. Each face's emitting leaf index goes to @p leaf.
+// geometry g, face neighbours acr), walking top-down so every node's neighbours, their
+// states and its geometry come from its parent's in O(1). Erased children and full
+// children with four full neighbours cost one visit each and no further work.
 // NOLINTNEXTLINE(misc-no-recursion): depth ≤ kMaxDepth
 void visit(const TetHierarchy& h, const WalkTables& wt, const RootKeys& rk, int depth, std::uint32_t word,
-           std::uint32_t idx, const NodeGeometry& g, const std::array<WalkAcross, 4>& acr,
-           std::vector<SurfaceFace>& out, std::vector<std::uint32_t>& leaf, std::size_t& visits) {
+           const NodeGeometry& g, const std::array<WalkAcross, 4>& acr, std::vector<SurfaceFace>& out,
+           std::size_t& visits) {
   ++visits;
   const NodeState st = TetHierarchy::state_of_word(word);
   if (st == NodeState::Erased) return;
   if (st == NodeState::Full) {
     emit_leaf(h, wt, rk, g, acr, out);
-    leaf.resize(out.size(), idx);
     return;
   }
   WalkChildren wc;
   wc.own = h.child_words(word);
-  const std::uint32_t span = leaf_span(depth + 1);
   for (int c = 0; c < 8; ++c) {
     const std::uint32_t cw = wc.own[static_cast<std::size_t>(c)];
     if (cw == TetHierarchy::kErased) {
@@ -609,18 +596,14 @@ void visit(const TetHierarchy& h, const WalkTables& wt, const RootKeys& rk, int 
     std::array<WalkAcross, 4> cacr;
     for (int f = 0; f < 4; ++f) child_across(h, wt, depth, wc, c, f, acr, cacr[static_cast<std::size_t>(f)]);
     const auto cu = static_cast<std::size_t>(c);
-    const std::uint32_t cidx = idx + static_cast<std::uint32_t>(c) * span;
     if (cw == TetHierarchy::kFull) {
       ++visits;
       bool exposed = false;
       for (const WalkAcross& a : cacr) exposed = exposed || a.word != TetHierarchy::kFull;
-      if (exposed) {
-        emit_leaf(h, wt, rk, child_geometry(wt.tree, g, cu), cacr, out);
-        leaf.resize(out.size(), cidx);
-      }
+      if (exposed) emit_leaf(h, wt, rk, child_geometry(wt.tree, g, cu), cacr, out);
       continue;
     }
-    visit(h, wt, rk, depth + 1, cw, cidx, child_geometry(wt.tree, g, cu), cacr, out, leaf, visits);
+    visit(h, wt, rk, depth + 1, cw, child_geometry(wt.tree, g, cu), cacr, out, visits);
   }
 }
 
@@ -628,17 +611,14 @@ void visit(const TetHierarchy& h, const WalkTables& wt, const RootKeys& rk, int 
 
 namespace {
 
-// The interval of depth-first leaf indices covered by n's ancestor at depth `level` (n itself
-// when shallower).
-std::pair<std::uint32_t, std::uint32_t> interval_at(const NodeRef& n, int level) {
+// Chunk indices [lo, hi) at chunk level L covered by node n: the first min(depth, L) slots of
+// its path, most significant first (depth-first order).
+std::pair<std::uint32_t, std::uint32_t> chunk_range(const NodeRef& n, int level) {
+  std::uint32_t idx = 0;
   const int d = std::min<int>(n.depth, level);
-  NodeRef a = n;
-  if (n.depth > d) {
-    a.depth = static_cast<std::uint8_t>(d);
-    a.path = d > 0 ? n.path & ((1U << (3 * d)) - 1U) : 0U;
-  }
-  const std::uint32_t lo = leaf_index(a);
-  return {lo, lo + leaf_span(d)};
+  for (int l = 1; l <= d; ++l) idx = idx * 8U + static_cast<std::uint32_t>(n.slot(l));
+  const std::uint32_t span = 1U << (3 * (level - d));
+  return {idx * span, idx * span + span};
 }
 
 std::array<Across, 4> root_acr(const TetHierarchy& h, std::uint32_t r) {
@@ -654,11 +634,6 @@ BoundarySurface::BoundarySurface(const TetHierarchy& hierarchy, const BoundarySu
   if (options.chunk_level < 0 || options.chunk_level > 4) {
     throw InvalidInput("boundary surface: chunk level must be between 0 and 4, got " + std::to_string(options.chunk_level));
   }
-  if (options.unit_level < options.chunk_level || options.unit_level > kMaxDepth) {
-    throw InvalidInput("boundary surface: unit level must be between the chunk level (" +
-                       std::to_string(options.chunk_level) + ") and " + std::to_string(kMaxDepth) + ", got " +
-                       std::to_string(options.unit_level));
-  }
   m_full_chunks = 1U << (3 * options.chunk_level);
   rebuild_all(hierarchy);
 }
@@ -669,22 +644,15 @@ BoundarySurface& BoundarySurface::operator=(BoundarySurface&&) noexcept = defaul
 std::size_t BoundarySurface::face_count() const noexcept {
   std::size_t n = 0;
   for (const auto& root : m_chunks)
-    for (const auto& c : root) n += c.faces.size();
+    for (const auto& c : root) n += c.size();
   return n;
-}
-
-std::size_t BoundarySurface::leaf_index_bytes() const noexcept {
-  std::size_t n = m_scratch.leaf.capacity();
-  for (const auto& root : m_chunks)
-    for (const auto& c : root) n += c.leaf.capacity();
-  return n * sizeof(std::uint32_t);
 }
 
 const std::vector<SurfaceFace>& BoundarySurface::v_list(std::size_t r) const {
   if (m_flat_stale[r]) {
     auto& flat = m_flat[r];
     flat.clear();
-    for (const auto& c : m_chunks[r]) flat.insert(flat.end(), c.faces.begin(), c.faces.end());
+    for (const auto& c : m_chunks[r]) flat.insert(flat.end(), c.begin(), c.end());
     m_flat_stale[r] = 0;
   }
   return m_flat[r];
@@ -698,7 +666,7 @@ const std::vector<std::vector<SurfaceFace>>& BoundarySurface::v_lists() const {
 
 void BoundarySurface::rebuild_all(const TetHierarchy& hierarchy) {
   const std::size_t n = hierarchy.root_count();
-  m_chunks.assign(n, std::vector<ChunkList>(1));
+  m_chunks.assign(n, std::vector<std::vector<SurfaceFace>>(1));
   m_flat.assign(n, {});
   m_flat_stale.assign(n, 0);
   m_stale_roots.clear();
@@ -710,7 +678,7 @@ void BoundarySurface::rebuild_all(const TetHierarchy& hierarchy) {
   rebuild_ranges(hierarchy);
 }
 
-void BoundarySurface::mark_root(std::uint32_t r) { m_dirty.push_back({r, 0, kAllLeaves}); }
+void BoundarySurface::mark_root(std::uint32_t r) { m_dirty.push_back({r, 0, m_full_chunks}); }
 
 namespace {
 
@@ -737,13 +705,13 @@ const std::array<std::array<std::uint8_t, 16>, 8>& parent_face_masks() {
 
 }  // namespace
 
-// Marks the unit of `node` (its ancestor y at the unit level, or the node itself when
-// shallower) and, for each of its faces on y's boundary, records (y, face) in m_face_marks
+// Marks the chunks of `node` and, for each of its faces on the boundary of its ancestor y at
+// the chunk level (or of the node itself when shallower), records (y, face) in m_face_marks
 // for mark_faces(). A range or mark equal to the previous one is not repeated (changed nodes
-// come in traversal order, so neighbours in the list share their unit).
-void BoundarySurface::mark_node(const NodeRef& node) {
-  const int level = m_options.unit_level;
-  const auto [lo, hi] = interval_at(node, level);
+// come in traversal order, so neighbours in the list share their chunk).
+void BoundarySurface::mark_node(const TetHierarchy& /*h*/, const NodeRef& node) {
+  const int level = m_options.chunk_level;
+  const auto [lo, hi] = chunk_range(node, level);
   if (m_dirty.empty() || m_dirty.back().root != node.root || m_dirty.back().lo != lo || m_dirty.back().hi != hi)
     m_dirty.push_back({node.root, lo, hi});
   const auto& up = parent_face_masks();
@@ -752,7 +720,7 @@ void BoundarySurface::mark_node(const NodeRef& node) {
   if (node.depth > level) {
     for (int d = node.depth; d > level && mask != 0; --d) mask = up[static_cast<std::size_t>(node.slot(d))][mask];
     y.depth = static_cast<std::uint8_t>(level);
-    y.path = level > 0 ? node.path & ((1U << (3 * level)) - 1U) : 0U;
+    y.path = node.path & ((1U << (3 * level)) - 1U);
   }
   if (mask == 0) return;
   if (!m_face_marks.empty() && m_face_marks.back().node == y) {
@@ -762,36 +730,32 @@ void BoundarySurface::mark_node(const NodeRef& node) {
   }
 }
 
-// Marks the units across the recorded faces. The virtual neighbours of each recorded node's
-// faces come top-down from its root; the levels its path shares with the previous node's
-// are reused (changed nodes come in traversal order, so most share all but the last).
+// Marks the chunks across the recorded faces: one top-down walk per distinct node.
 void BoundarySurface::mark_faces(const TetHierarchy& h) {
-  std::array<std::array<Across, 4>, kMaxDepth + 1> acr{};
-  NodeRef prev{};
-  int have = -1;  // acr[0..have] hold prev's path
-  for (const FaceMark& m : m_face_marks) {
-    const NodeRef& y = m.node;
-    int common = 0;
-    if (have >= 0 && prev.root == y.root) {
-      const int n = std::min<int>(have, y.depth);
-      while (common < n && prev.slot(common + 1) == y.slot(common + 1)) ++common;
-    } else {
-      acr[0] = root_acr(h, y.root);
-    }
-    for (int l = common + 1; l <= y.depth; ++l) {
-      const NodeRef p{y.root, l > 1 ? y.path & ((1U << (3 * (l - 1))) - 1U) : 0U, static_cast<std::uint8_t>(l - 1)};
+  std::sort(m_face_marks.begin(), m_face_marks.end(), [](const FaceMark& a, const FaceMark& b) {
+    return std::tie(a.node.root, a.node.depth, a.node.path) < std::tie(b.node.root, b.node.depth, b.node.path);
+  });
+  const int level = m_options.chunk_level;
+  std::size_t i = 0;
+  while (i < m_face_marks.size()) {
+    const NodeRef y = m_face_marks[i].node;
+    std::uint8_t mask = 0;
+    for (; i < m_face_marks.size() && m_face_marks[i].node == y; ++i) mask = static_cast<std::uint8_t>(mask | m_face_marks[i].faces);
+    // Virtual neighbours of y's faces, top-down from the root.
+    std::array<Across, 4> acr = root_acr(h, y.root);
+    NodeRef p{y.root, 0, 0};
+    for (int l = 1; l <= y.depth; ++l) {
       const int s = y.slot(l);
-      for (int k = 0; k < 4; ++k)
-        acr[static_cast<std::size_t>(l)][static_cast<std::size_t>(k)] =
-            virtual_child_across(p, s, k, acr[static_cast<std::size_t>(l - 1)]);
+      std::array<Across, 4> cacr;
+      for (int k = 0; k < 4; ++k) cacr[static_cast<std::size_t>(k)] = virtual_child_across(p, s, k, acr);
+      acr = cacr;
+      p = p.child(s);
     }
-    prev = y;
-    have = y.depth;
     for (int g = 0; g < 4; ++g) {
-      if (((m.faces >> g) & 1U) == 0) continue;
-      const Across& a = acr[static_cast<std::size_t>(y.depth)][static_cast<std::size_t>(g)];
+      if (((mask >> g) & 1U) == 0) continue;
+      const Across& a = acr[static_cast<std::size_t>(g)];
       if (a.boundary) continue;
-      const auto [nlo, nhi] = interval_at(a.node, a.node.depth);
+      const auto [nlo, nhi] = chunk_range(a.node, level);
       m_dirty.push_back({a.node.root, nlo, nhi});
     }
   }
@@ -825,127 +789,10 @@ void BoundarySurface::update(const TetHierarchy& hierarchy, std::span<const Node
 void BoundarySurface::update(const TetHierarchy& hierarchy, std::span<const NodeRef> changed_nodes,
                              std::size_t max_node_visits) {
   m_face_marks.clear();
-  for (const NodeRef& n : changed_nodes) mark_node(n);
+  for (const NodeRef& n : changed_nodes) mark_node(hierarchy, n);
   mark_faces(hierarchy);
   rebuild_ranges(hierarchy, max_node_visits);
 }
-
-// Re-walks the dirty units of one root, top-down from the root along the dirty intervals,
-// and splices each unit's faces into its chunk list in place of the faces its leaves emitted
-// before: the faces in front of it are copied from the old list, and the list is swapped in
-// when the walk leaves the chunk.
-struct BoundarySurface::Rebuilder {
-  BoundarySurface& s;
-  const TetHierarchy& h;
-  std::uint32_t r;
-  std::span<const Range> iv;  // this root's dirty intervals, sorted and disjoint
-  std::size_t max_node_visits;
-  std::vector<ChunkList>& ch;
-  WalkTables wt;
-  RootKeys rk;
-  int chunk_shift;  // leaf index → chunk index (a root kept in one list: everything → 0)
-  int unit_depth;   // internal nodes fully dirty are units from this depth on
-  std::size_t i = 0;
-  bool stopped = false;
-  std::uint32_t resume = 0;  // after a stop: the first leaf index not rebuilt
-  std::int64_t cur = -1;     // the chunk being spliced into s.m_scratch
-  std::size_t pos = 0;       // its old faces before pos are consumed
-
-  Rebuilder(BoundarySurface& s_, const TetHierarchy& h_, std::uint32_t r_, std::span<const Range> iv_, std::size_t budget)
-      : s(s_), h(h_), r(r_), iv(iv_), max_node_visits(budget), ch(s_.m_chunks[r_]), rk(h_, r_),
-        chunk_shift(ch.size() == 1 ? 31 : 3 * (kMaxDepth - s_.m_options.chunk_level)),
-        unit_depth(std::max(ch.size() == 1 ? 0 : s_.m_options.chunk_level, s_.m_options.unit_level)) {}
-
-  [[nodiscard]] std::uint32_t chunk_of(std::uint32_t idx) const noexcept {
-    return chunk_shift >= 31 ? 0U : idx >> chunk_shift;
-  }
-
-  void open(std::uint32_t k) {
-    if (cur == static_cast<std::int64_t>(k)) return;
-    close();
-    cur = k;
-    pos = 0;
-    s.m_scratch.faces.clear();
-    s.m_scratch.leaf.clear();
-  }
-
-  void close() {
-    if (cur < 0) return;
-    ChunkList& c = ch[static_cast<std::size_t>(cur)];
-    s.m_scratch.faces.insert(s.m_scratch.faces.end(), c.faces.begin() + static_cast<std::ptrdiff_t>(pos), c.faces.end());
-    s.m_scratch.leaf.insert(s.m_scratch.leaf.end(), c.leaf.begin() + static_cast<std::ptrdiff_t>(pos), c.leaf.end());
-    std::swap(c.faces, s.m_scratch.faces);
-    std::swap(c.leaf, s.m_scratch.leaf);
-    s.m_rebuilt_chunks.push_back({r, static_cast<std::uint32_t>(cur)});
-    cur = -1;
-  }
-
-  // Re-walks the unit covering leaf indices [lo, hi) at depth d.
-  void unit(std::uint32_t lo, std::uint32_t hi, int d, std::uint32_t word, const NodeGeometry& g,
-            const std::array<WalkAcross, 4>& acr) {
-    const std::uint32_t k = chunk_of(lo);
-    open(k);
-    ChunkList& c = ch[k];
-    const auto b = std::lower_bound(c.leaf.begin() + static_cast<std::ptrdiff_t>(pos), c.leaf.end(), lo);
-    const auto e = std::lower_bound(b, c.leaf.end(), hi);
-    const auto bi = b - c.leaf.begin(), ei = e - c.leaf.begin();
-    s.m_scratch.faces.insert(s.m_scratch.faces.end(), c.faces.begin() + static_cast<std::ptrdiff_t>(pos), c.faces.begin() + bi);
-    s.m_scratch.leaf.insert(s.m_scratch.leaf.end(), c.leaf.begin() + static_cast<std::ptrdiff_t>(pos), b);
-    pos = static_cast<std::size_t>(ei);
-    visit(h, wt, rk, d, word, lo, g, acr, s.m_scratch.faces, s.m_scratch.leaf, s.m_visits);
-    // A leaf above the chunk level covers several chunks: its faces went to the first.
-    const std::uint32_t last = chunk_of(hi - 1);
-    for (std::uint32_t k2 = k + 1; k2 <= last; ++k2) {
-      if (ch[k2].faces.empty()) continue;
-      ch[k2].faces.clear();
-      ch[k2].leaf.clear();
-      s.m_rebuilt_chunks.push_back({r, k2});
-    }
-    if (max_node_visits > 0 && s.m_visits >= max_node_visits) {
-      stopped = true;
-      resume = hi;
-    }
-  }
-
-  // An internal node at depth d covering [lo, …) with dirty units below it.
-  // NOLINTNEXTLINE(misc-no-recursion): depth ≤ kMaxDepth
-  void descend(int d, std::uint32_t word, std::uint32_t lo, const NodeGeometry& g, const std::array<WalkAcross, 4>& acr) {
-    ++s.m_visits;
-    WalkChildren wc;
-    wc.own = h.child_words(word);
-    const std::uint32_t span = leaf_span(d + 1);
-    for (int c = 0; c < 8 && !stopped; ++c) {
-      const std::uint32_t clo = lo + static_cast<std::uint32_t>(c) * span, chi = clo + span;
-      while (i < iv.size() && iv[i].hi <= clo) ++i;
-      if (i == iv.size()) return;
-      if (iv[i].lo >= chi) continue;
-      const std::uint32_t cw = wc.own[static_cast<std::size_t>(c)];
-      std::array<WalkAcross, 4> cacr;
-      for (int f = 0; f < 4; ++f) child_across(h, wt, d, wc, c, f, acr, cacr[static_cast<std::size_t>(f)]);
-      const NodeGeometry cg = child_geometry(wt.tree, g, static_cast<std::size_t>(c));
-      const bool covered = iv[i].lo <= clo && chi <= iv[i].hi;
-      if (TetHierarchy::state_of_word(cw) != NodeState::Internal || (covered && d + 1 >= unit_depth) || d + 1 >= kMaxDepth) {
-        unit(clo, chi, d + 1, cw, cg, cacr);
-      } else {
-        descend(d + 1, cw, clo, cg, cacr);
-      }
-    }
-  }
-
-  void run() {
-    const std::uint32_t word = h.root_word(r);
-    std::array<WalkAcross, 4> acr;
-    for (int f = 0; f < 4; ++f) acr[static_cast<std::size_t>(f)] = walk_across(root_across(h, r, f), f);
-    const NodeGeometry g = h.geometry(NodeRef{r, 0, 0});
-    const bool covered = iv.front().lo == 0 && iv.front().hi == kAllLeaves;
-    if (TetHierarchy::state_of_word(word) != NodeState::Internal || (covered && unit_depth == 0)) {
-      unit(0, kAllLeaves, 0, word, g, acr);
-    } else {
-      descend(0, word, 0, g, acr);
-    }
-    close();
-  }
-};
 
 void BoundarySurface::rebuild_ranges(const TetHierarchy& hierarchy, std::size_t max_node_visits) {
   m_rebuilt.clear();
@@ -953,9 +800,9 @@ void BoundarySurface::rebuild_ranges(const TetHierarchy& hierarchy, std::size_t 
   m_visits = 0;
   std::sort(m_dirty.begin(), m_dirty.end(),
             [](const Range& a, const Range& b) { return a.root != b.root ? a.root < b.root : a.lo < b.lo; });
-  // Merge overlapping and adjacent ranges of a root.
-  auto& merged = m_merged;
-  merged.clear();
+  // Merge overlapping ranges of a root.
+  std::vector<Range> merged;
+  merged.reserve(m_dirty.size());
   for (const Range& d : m_dirty) {
     if (!merged.empty() && merged.back().root == d.root && d.lo <= merged.back().hi) {
       merged.back().hi = std::max(merged.back().hi, d.hi);
@@ -964,35 +811,24 @@ void BoundarySurface::rebuild_ranges(const TetHierarchy& hierarchy, std::size_t 
     }
   }
   m_dirty.clear();
-  std::size_t i = 0;
-  while (i < merged.size()) {
+  for (std::size_t i = 0; i < merged.size(); ++i) {
+    Range& d = merged[i];
     if (max_node_visits > 0 && m_visits >= max_node_visits) {
       m_dirty.assign(merged.begin() + static_cast<std::ptrdiff_t>(i), merged.end());  // the rest waits
       break;
     }
-    const std::uint32_t r = merged[i].root;
-    std::size_t j = i;
-    while (j < merged.size() && merged[j].root == r) ++j;
-    std::span<const Range> iv(merged.data() + i, j - i);
-    const Range whole{r, 0, kAllLeaves};
-    auto& ch = m_chunks[r];
-    if (ch.size() == 1 && m_full_chunks > 1 && TetHierarchy::state_of_word(hierarchy.root_word(r)) == NodeState::Internal) {
-      ch.resize(m_full_chunks);  // first refinement: every chunk is rebuilt
-      iv = std::span<const Range>(&whole, 1);
+    m_range_end = 0;
+    const std::uint32_t stop = rebuild_range(hierarchy, d.root, d.lo, d.hi, max_node_visits);
+    if (!m_mark[d.root]) {
+      m_mark[d.root] = 1;
+      m_rebuilt.push_back(d.root);
     }
-    Rebuilder rb(*this, hierarchy, r, iv, max_node_visits);
-    rb.run();
-    if (!m_mark[r]) {
-      m_mark[r] = 1;
-      m_rebuilt.push_back(r);
-    }
-    if (rb.stopped) {
-      for (const Range& d : iv)
-        if (d.hi > rb.resume) m_dirty.push_back({r, std::max(d.lo, rb.resume), d.hi});
-      m_dirty.insert(m_dirty.end(), merged.begin() + static_cast<std::ptrdiff_t>(j), merged.end());
+    if (stop < d.hi || (stop < m_range_end && m_range_end > 0)) {
+      d.lo = stop;
+      d.hi = std::max(d.hi, m_range_end);
+      m_dirty.assign(merged.begin() + static_cast<std::ptrdiff_t>(i), merged.end());
       break;
     }
-    i = j;
   }
   for (const std::uint32_t r : m_rebuilt) {
     m_mark[r] = 0;
@@ -1003,6 +839,66 @@ void BoundarySurface::rebuild_ranges(const TetHierarchy& hierarchy, std::size_t 
   }
   std::sort(m_rebuilt_chunks.begin(), m_rebuilt_chunks.end());
   m_rebuilt_chunks.erase(std::unique(m_rebuilt_chunks.begin(), m_rebuilt_chunks.end()), m_rebuilt_chunks.end());
+}
+
+// Rebuilds the units (the node on each chunk's path at the chunk level, or the shallower
+// leaf covering it) meeting chunks [lo, hi) of root r; stops early (returning the first chunk
+// not rebuilt) once max_node_visits (> 0) nodes were walked. Returns hi when done.
+std::uint32_t BoundarySurface::rebuild_range(const TetHierarchy& h, std::uint32_t r, std::uint32_t lo, std::uint32_t hi,
+                                             std::size_t max_node_visits) {
+  auto& ch = m_chunks[r];
+  const std::uint32_t root_word = h.root_word(r);
+  if (ch.size() == 1 && m_full_chunks > 1 && TetHierarchy::state_of_word(root_word) == NodeState::Internal) {
+    ch.resize(m_full_chunks);  // first refinement: every chunk is rebuilt
+    lo = 0;
+    hi = m_full_chunks;
+  }
+  const int level = ch.size() == 1 ? 0 : m_options.chunk_level;
+  const std::uint32_t requested_hi = hi;
+  if (level == 0) {
+    lo = 0;
+    hi = 1;
+  }
+  hi = std::min<std::uint32_t>(hi, static_cast<std::uint32_t>(ch.size()));
+  std::array<WalkAcross, 4> racr;
+  for (int f = 0; f < 4; ++f) racr[static_cast<std::size_t>(f)] = walk_across(root_across(h, r, f), f);
+  const WalkTables wt;
+  const RootKeys rk(h, r);
+  std::uint32_t c = lo;
+  while (c < hi) {
+    NodeRef node{r, 0, 0};
+    std::uint32_t word = root_word;
+    std::array<WalkAcross, 4> acr = racr;
+    int d = 0;
+    while (d < level && TetHierarchy::state_of_word(word) == NodeState::Internal) {
+      const int s = static_cast<int>((c >> (3 * (level - d - 1))) & 7U);
+      std::array<WalkAcross, 4> cacr;
+      WalkChildren wc;
+      wc.own = h.child_words(word);
+      for (int f = 0; f < 4; ++f) child_across(h, wt, d, wc, s, f, acr, cacr[static_cast<std::size_t>(f)]);
+      node = node.child(s);
+      word = wc.own[static_cast<std::size_t>(s)];
+      acr = cacr;
+      ++d;
+    }
+    const std::uint32_t span = 1U << (3 * (level - d));
+    const std::uint32_t ulo = c & ~(span - 1U);
+    auto& out = ch[ulo];
+    out.clear();
+    visit(h, wt, rk, node.depth, word, h.geometry(node), acr, out, m_visits);
+    m_rebuilt_chunks.push_back({r, ulo});
+    for (std::uint32_t k = ulo + 1; k < ulo + span; ++k) {
+      if (ch[k].empty()) continue;
+      ch[k].clear();
+      m_rebuilt_chunks.push_back({r, k});
+    }
+    c = ulo + span;
+    if (max_node_visits > 0 && m_visits >= max_node_visits && c < hi) {
+      m_range_end = hi;
+      return c;
+    }
+  }
+  return std::max(requested_hi, hi);
 }
 
 geometry::TriangleMesh assemble_surface(std::span<const std::vector<SurfaceFace>> v_lists,

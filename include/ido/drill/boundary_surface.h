@@ -38,13 +38,6 @@ struct BoundarySurfaceOptions {
   /// only the chunks holding a changed node or lying across one of its faces. 0 = whole
   /// roots. Range 0–4; default 3.
   int chunk_level = 3;
-  /// Depth of the smallest sub-trees ("units") re-walked on their own. An update re-walks,
-  /// for each changed node, its ancestor at this depth (the node itself when shallower) and
-  /// the nodes at that ancestor's depth across the faces the change touched (the leaf
-  /// covering one, where it is coarser), and splices their faces into their chunk's list in
-  /// place of the old ones; the rest of the chunk is copied, not re-walked. Range
-  /// chunk_level–kMaxDepth; default 6.
-  int unit_level = 6;
 };
 
 /// Names one chunk's face list: root and chunk index (depth-first order of the sub-trees at
@@ -66,15 +59,11 @@ struct ChunkId {
 /// Storage: a root that was never refined keeps one list; a refined root keeps one list per
 /// chunk (sub-tree at chunk_level; the faces of a leaf shallower than that go to the first
 /// chunk it covers). Concatenated in chunk order they are exactly the v_list of a full
-/// depth-first walk. Each face also carries the depth-first index of the leaf that emitted
-/// it (4 bytes a face, kept beside the list), so the faces of any sub-tree are found in its
-/// chunk by binary search and replaced without re-walking its siblings (unit_level).
-/// v_list() and v_lists() concatenate on request (cached until the next update), so they
-/// cost O(faces) after a change; the chunk accessors cost nothing.
+/// depth-first walk. v_list() and v_lists() concatenate on request (cached until the next
+/// update), so they cost O(faces) after a change; the chunk accessors cost nothing.
 class BoundarySurface {
  public:
-  /// Builds every root's v_list. @throws ido::InvalidInput for chunk_level outside 0–4 or
-  /// unit_level outside chunk_level–kMaxDepth.
+  /// Builds every root's v_list. @throws ido::InvalidInput for chunk_level outside 0–4.
   explicit BoundarySurface(const TetHierarchy& hierarchy, const BoundarySurfaceOptions& options = {});
   ~BoundarySurface();
   BoundarySurface(BoundarySurface&&) noexcept;
@@ -88,13 +77,13 @@ class BoundarySurface {
   /// had a face on that root face), so untouched neighbours are not rebuilt.
   void update(const TetHierarchy& hierarchy, std::span<const std::uint32_t> changed_roots,
               std::span<const std::uint8_t> changed_faces);
-  /// Rebuilds only the units (see BoundarySurfaceOptions::unit_level) affected by the nodes
-  /// in @p changed_nodes (Eroder::changed_nodes): each node's unit and the units across its
-  /// faces (in this or a neighbouring root). The result equals a full rebuild. last_rebuilt()
-  /// lists the roots touched and last_rebuilt_chunks() the chunk lists rewritten.
+  /// Rebuilds only the chunks affected by the nodes in @p changed_nodes (Eroder::changed_nodes):
+  /// each node's chunk(s) and the chunks across its faces (in this or a neighbouring root).
+  /// The result equals a full rebuild. last_rebuilt() lists the roots touched and
+  /// last_rebuilt_chunks() the chunk lists rewritten.
   void update(const TetHierarchy& hierarchy, std::span<const NodeRef> changed_nodes);
-  /// As above, but stops once @p max_node_visits nodes were walked (after the unit in
-  /// progress; 0 = unlimited): the units not rebuilt yet stay queued for the next update or
+  /// As above, but stops once @p max_node_visits nodes were walked (after the chunk in
+  /// progress; 0 = unlimited): the chunks not rebuilt yet stay queued for the next update or
   /// flush(), so until then the v_lists lag the tree.
   void update(const TetHierarchy& hierarchy, std::span<const NodeRef> changed_nodes, std::size_t max_node_visits);
   /// True when chunks wait to be rebuilt (a budgeted update stopped early).
@@ -115,11 +104,7 @@ class BoundarySurface {
   /// Chunk lists of root @p r: 1 (a root never refined) or 8^chunk_level.
   [[nodiscard]] std::size_t chunk_count(std::size_t r) const noexcept { return m_chunks[r].size(); }
   /// Faces of chunk @p c of root @p r.
-  [[nodiscard]] const std::vector<SurfaceFace>& chunk(std::size_t r, std::size_t c) const noexcept {
-    return m_chunks[r][c].faces;
-  }
-  /// Bytes of the leaf indices kept beside the faces (4 per face, capacity counted).
-  [[nodiscard]] std::size_t leaf_index_bytes() const noexcept;
+  [[nodiscard]] const std::vector<SurfaceFace>& chunk(std::size_t r, std::size_t c) const noexcept { return m_chunks[r][c]; }
   /// Node visits of the last update or rebuild (work done).
   [[nodiscard]] std::size_t last_visits() const noexcept { return m_visits; }
   /// Faces over all v_lists.
@@ -127,34 +112,26 @@ class BoundarySurface {
   [[nodiscard]] const BoundarySurfaceOptions& options() const noexcept { return m_options; }
 
  private:
-  // Intervals of depth-first leaf indices at kMaxDepth (a node at depth d covers 8^(kMaxDepth−d)).
   struct Range {
     std::uint32_t root = 0;
-    std::uint32_t lo = 0, hi = 0;
+    std::uint32_t lo = 0, hi = 0;  // chunk indices at the full chunk level
   };
-  // One chunk's faces and, per face, the depth-first index of the leaf that emitted it
-  // (non-decreasing along the list).
-  struct ChunkList {
-    std::vector<SurfaceFace> faces;
-    std::vector<std::uint32_t> leaf;
-  };
-  struct Rebuilder;
   void rebuild_ranges(const TetHierarchy& hierarchy, std::size_t max_node_visits = 0);
-  void mark_node(const NodeRef& node);
+  std::uint32_t rebuild_range(const TetHierarchy& hierarchy, std::uint32_t r, std::uint32_t lo, std::uint32_t hi,
+                              std::size_t max_node_visits);
+  void mark_node(const TetHierarchy& hierarchy, const NodeRef& node);
   void mark_faces(const TetHierarchy& hierarchy);
   void mark_root(std::uint32_t r);
 
   BoundarySurfaceOptions m_options;
   std::uint32_t m_full_chunks = 1;  // 8^chunk_level
-  std::vector<std::vector<ChunkList>> m_chunks;
+  std::vector<std::vector<std::vector<SurfaceFace>>> m_chunks;
   mutable std::vector<std::vector<SurfaceFace>> m_flat;
   mutable std::vector<std::uint8_t> m_flat_stale;
   mutable std::vector<std::uint32_t> m_stale_roots;
   std::vector<std::uint32_t> m_rebuilt;
   std::vector<ChunkId> m_rebuilt_chunks;
   std::vector<Range> m_dirty;
-  std::vector<Range> m_merged;
-  ChunkList m_scratch;  // the chunk list being spliced (swapped with the chunk's when done)
   struct FaceMark {
     NodeRef node;
     std::uint8_t faces = 0;
@@ -162,6 +139,7 @@ class BoundarySurface {
   std::vector<FaceMark> m_face_marks;
   std::vector<std::uint8_t> m_mark;
   std::size_t m_visits = 0;
+  std::uint32_t m_range_end = 0;  // end of the range rebuild_range stopped in (0: it finished)
 };
 
 /// The welded, crack-free triangle mesh (mm) of the faces in @p v_lists on mesh vertices
