@@ -7,7 +7,9 @@
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <cstring>
 #include <string>
+#include <unordered_map>
 
 #include "ido/core/error.h"
 #include "ido/core/log.h"
@@ -20,6 +22,28 @@
 #include "ido/segment/topology_repair.h"
 
 namespace ido::segment {
+
+namespace {
+
+// The bits of a position: a vertex the remesher left where it was is found again by them.
+struct PositionKey {
+  std::uint64_t x, y, z;
+  bool operator==(const PositionKey&) const = default;
+};
+struct PositionKeyHash {
+  std::size_t operator()(const PositionKey& k) const noexcept {
+    return std::size_t((k.x * 0x9E3779B97F4A7C15ull) ^ (k.y * 0xBF58476D1CE4E5B9ull) ^ (k.z * 0x94D049BB133111EBull));
+  }
+};
+PositionKey position_key(const Vec3& p) {
+  PositionKey k;
+  std::memcpy(&k.x, &p[0], sizeof k.x);
+  std::memcpy(&k.y, &p[1], sizeof k.y);
+  std::memcpy(&k.z, &p[2], sizeof k.z);
+  return k;
+}
+
+}  // namespace
 
 geometry::TriangleMesh balloon_icosphere(const Vec3& centre, double radius, int subdivisions) {
   const double t = (1.0 + std::sqrt(5.0)) / 2.0;
@@ -109,6 +133,16 @@ struct Balloon::State {
   double plateau_sigma0 = 0, plateau_dsigma = 1;
   Vec3 scanner_blur2_mm2 = Vec3::Zero();  // scanner blur variance along each grid axis (mm²)
   double smoothing2_mm2 = 0;              // pre-smoothing variance (mm²)
+  // The edge stage's last profile search per vertex (see BalloonOptions::edge_reuse_move_voxels):
+  // where the vertex and its normal were, the wall found (a point, world mm), and how many steps
+  // it has been reused since. Emptied by a repair; carried through a remesh for the vertices it
+  // left in place.
+  struct WallSearch {
+    Vec3 position = Vec3::Zero(), normal = Vec3::Zero(), wall = Vec3::Zero();
+    bool valid = false, found = false;
+    int reused = 0;
+  };
+  std::vector<WallSearch> wall_search;
 
   // The fitter whose σ is nearest the blur along @p normal: pre-smoothing plus the scanner's
   // blur and the voxel's partial-volume box along each grid axis.
@@ -159,7 +193,21 @@ struct Balloon::State {
     r.split_long_edges(4.0 / 3.0 * target);
     r.collapse_short_edges(0.8 * target * 0.75, 4.0 / 3.0 * target);
     r.flip_edges();
-    set_mesh(r.mesh(), r.locked());
+    const geometry::TriangleMesh out = r.mesh();
+    if (!wall_search.empty()) {
+      // Splits add vertices and collapses move them (to a midpoint); every other vertex keeps
+      // its position bit for bit, and with it its last search.
+      const auto& old = particles.positions();
+      std::unordered_map<PositionKey, std::int32_t, PositionKeyHash> at;
+      at.reserve(old.size());
+      for (std::size_t i = 0; i < old.size(); ++i) at.emplace(position_key(old[i]), static_cast<std::int32_t>(i));
+      std::vector<WallSearch> kept(out.vertices.size());
+      for (std::size_t i = 0; i < kept.size(); ++i)
+        if (const auto it = at.find(position_key(out.vertices[i])); it != at.end())
+          kept[i] = wall_search[std::size_t(it->second)];
+      wall_search = std::move(kept);
+    }
+    set_mesh(out, r.locked());
   }
   std::vector<std::uint8_t> locked_flags() const {
     std::vector<std::uint8_t> l(particles.size());
@@ -176,6 +224,7 @@ struct Balloon::State {
     const geometry::TriangleMesh repaired = repair_topology(mesh(), pairs, ro);
     if (repaired.triangles.empty()) return;  // keep the old surface rather than lose it
     set_mesh(repaired, {});
+    if (!wall_search.empty()) wall_search.assign(particles.size(), WallSearch{});
     ++report.repairs;
   }
   // Handles intersections: freeze the vertices involved, then rebuild the surface.
@@ -218,6 +267,13 @@ struct Balloon::State {
     // Pass 1: the normal displacement each vertex asks for.
     std::vector<double> normal_mm(n, 0.0);
     std::vector<std::uint8_t> snapped(n, 0);
+    // A vertex that has barely moved and turned since its last profile search keeps the wall
+    // found then (BalloonOptions::edge_reuse_move_voxels).
+    const bool reuse = edge_stage && opt.edge_reuse_move_voxels > 0 && opt.edge_reuse_steps > 0;
+    if (reuse && wall_search.size() != n) wall_search.assign(n, WallSearch{});
+    const double reuse_move_mm = opt.edge_reuse_move_voxels * h;
+    const double reuse_cos = std::cos(opt.edge_reuse_turn_deg * kPi / 180.0);
+    std::vector<std::uint8_t> searched(n, 0);  // 1 = searched, 2 = kept its last wall
     parallel_for(
         n,
         [&](std::size_t i) {
@@ -229,6 +285,24 @@ struct Balloon::State {
           }
           const double I = smoothed.sample(x[i]);
           if (edge_stage) {
+            if (reuse) {
+              WallSearch& w = wall_search[i];
+              if (w.valid && w.reused < opt.edge_reuse_steps && (x[i] - w.position).norm() <= reuse_move_mm &&
+                  nrm.dot(w.normal) >= reuse_cos) {
+                ++w.reused;
+                searched[i] = 2;
+                if (w.found) {
+                  // The same wall point, read along the present normal; the curvature term as below.
+                  const double H = umbrella_mean_curvature(d.umbrella_mm[i], nrm, d.mean_edge2_mm2[i]);
+                  normal_mm[i] = (w.wall - x[i]).dot(nrm) + sigma2 * std::clamp(H, -1.0 / h, 1.0 / h);
+                  snapped[i] = 1;
+                } else {
+                  normal_mm[i] = step * opt.weights.inflation * inflation_speed(I, model);
+                }
+                return;
+              }
+            }
+            searched[i] = 1;
             auto t = edge_offset_along_normal(smoothed, x[i], nrm, model, search, 0.2 * h, min_rise, h);
             if (t && model.accept_brighter) {
               // Bone: the outer fall of a thin cortex that the blur has lowered is read by the
@@ -246,6 +320,15 @@ struct Balloon::State {
                   (smoothed.sample(x[i] + nrm * (*t + h)) - model.reference) * background_side < -model.tolerance)
                 w = thin_gap[blur_level(nrm)].wall_offset(smoothed, x[i], nrm, model, background_side, *t);
               t = w && *w <= *t ? *w : limited;
+            }
+            if (reuse) {
+              WallSearch& w = wall_search[i];
+              w.valid = true;
+              w.reused = 0;
+              w.position = x[i];
+              w.normal = nrm;
+              w.found = t.has_value();
+              if (t) w.wall = x[i] + nrm * *t;
             }
             if (t) {
               // Blur (the scanner's and our pre-smoothing) moves the half-way level of a curved
@@ -336,6 +419,11 @@ struct Balloon::State {
         },
         opt.threaded, 512);
     x = std::move(next);
+    if (edge_stage)
+      for (std::size_t i = 0; i < n; ++i) {
+        report.edge_profile_searches += searched[i] == 1 ? 1 : 0;
+        report.edge_profile_reuses += searched[i] == 2 ? 1 : 0;
+      }
   }
 };
 

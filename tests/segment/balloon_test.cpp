@@ -293,6 +293,32 @@ TEST(Balloon, InflatesToSphereWall) {
   EXPECT_LT(err / double(r.surface.vertices.size()), 0.3);
 }
 
+TEST(Balloon, EdgeStageKeepsTheWallOfVerticesThatStoppedAndStaysOnTheWall) {
+  // The per-vertex stop of the edge stage: vertices that barely moved since their last profile
+  // search keep its wall. It must skip searches, and the surface it gives must lie on the wall
+  // as well as the one that searches every vertex every step.
+  const Vec3 c(16.2, 15.7, 16.4);
+  const double radius = 8.0;
+  const auto s = make_volume({33, 33, 33}, Vec3(1, 1, 1), [&](const Vec3& p) { return (p - c).norm() < radius; }, 300.0, 60.0);
+  BalloonOptions every_step;
+  every_step.edge_reuse_move_voxels = 0;
+  const auto a = segment_balloon(s.ct, {Vec3(16, 16, 16)}, every_step);
+  const auto b = segment_balloon(s.ct, {Vec3(16, 16, 16)});
+  expect_valid(b, 2);
+  EXPECT_EQ(a.report.edge_profile_reuses, 0);
+  EXPECT_GT(a.report.edge_profile_searches, 0);
+  // At least a third of the vertex-steps keep their wall on a converged sphere.
+  EXPECT_GT(3 * b.report.edge_profile_reuses, b.report.edge_profile_searches + b.report.edge_profile_reuses);
+  auto mean_error = [&](const geometry::TriangleMesh& m) {
+    double err = 0;
+    for (const Vec3& v : m.vertices) err += std::abs((v - c).norm() - radius);
+    return err / double(m.vertices.size());
+  };
+  EXPECT_LT(mean_error(b.surface), 0.3);
+  EXPECT_LT(std::abs(mean_error(b.surface) - mean_error(a.surface)), 0.02);
+  EXPECT_NEAR(dice(surface_to_mask(b.surface, s.ct), s.truth), dice(surface_to_mask(a.surface, s.ct), s.truth), 0.003);
+}
+
 TEST(Balloon, MeetsItselfAroundTorusHoleAndBecomesGenusOne) {
   const Vec3 c(20, 20, 10);
   const double R = 10, rr = 4;

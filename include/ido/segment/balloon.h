@@ -58,6 +58,15 @@ struct BalloonOptions {
   /// reach across a sharp bend such as a 2-mm twig's tip. 0 = plain average. Measured:
   /// docs/segmentation.md.
   double edge_offset_bend_deg = 45.0;
+  /// Per-vertex stop of the edge stage's profile search: a vertex that moved less than this
+  /// (× h) and whose normal turned less than edge_reuse_turn_deg since its last search keeps
+  /// the wall point found then (read along its present normal), for at most edge_reuse_steps
+  /// steps in a row; a vertex still travelling to its wall is searched every step. 0 = search
+  /// every vertex every step. Measured (bench/results/segment.md, 2026-12-02 session 8):
+  /// about half the searches skipped, phantom Dice within ±0.0015.
+  double edge_reuse_move_voxels = 0.15;
+  double edge_reuse_turn_deg = 3.0;  ///< see edge_reuse_move_voxels (degrees)
+  int edge_reuse_steps = 4;          ///< see edge_reuse_move_voxels
   /// Scanner blur (σ, × h) assumed when correcting the inward shift σ² H of the half-way
   /// level of a blurred curved wall (σ² = pre-smoothing² + this²; H the mean curvature).
   double scanner_blur_voxels = 0.7;
@@ -82,6 +91,8 @@ struct BalloonReport {
   std::int64_t self_intersections = 0;  ///< of the output (0 by construction)
   std::int64_t repairs = 0;             ///< topology repairs performed
   std::int64_t frozen_vertices = 0;     ///< vertices frozen at intersections (cumulative)
+  std::int64_t edge_profile_searches = 0;  ///< edge-stage profile searches (vertex × step)
+  std::int64_t edge_profile_reuses = 0;    ///< edge-stage steps where a vertex kept its last wall
   bool converged = false;
   bool leak_warning = false;  ///< the volume kept growing until a safeguard stopped it
   std::string stop_reason;    ///< "converged", "max_iterations" or "max_volume"
