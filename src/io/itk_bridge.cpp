@@ -197,7 +197,7 @@ RawVolume read_serially(const std::string& dir, itk::ImageSeriesReader<FloatImag
 // has its own GDCMImageIO and reader, made before the parallel loop (ITK's object factory
 // is not touched from the workers), and decodes into its place in one buffer; the grid is
 // the series reader's (computed from the headers). The voxels equal ImageSeriesReader's
-// (tests/io/dicom_test.cpp compares them bit for bit).
+// (tests/io/volume_io_test.cpp compares them bit for bit).
 RawVolume read_slices_in_parallel(const std::string& dir, const std::vector<std::string>& files,
                                   const FloatImage* grid) {
   RawVolume out = from_itk_header(grid);
