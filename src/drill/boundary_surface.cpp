@@ -338,16 +338,18 @@ const FaceMapTables& face_map_tables() {
 
 // What the v_list walk keeps of what lies across a face: the node's storage word, depth and
 // face map (Across without the node's root and path, which the walk never reads, and with
-// the vertex map as an id): 8 bytes, so a node's four are made and copied cheaply.
+// the vertex map as an id): 8 bytes, so a node's four are made and copied cheaply. No
+// default member values: the walk's per-child arrays are filled by child_across, and
+// zero-filling them first was 3 % of the surface update's instructions.
 struct WalkAcross {
-  std::uint32_t word = TetHierarchy::kErased;  ///< storage word of the node across (boundary: erased)
-  std::uint8_t depth = 0;                      ///< its depth
-  std::int8_t map = -1;                        ///< face map id (FaceMapTables); its face is map / 6
-  bool boundary = false;
+  std::uint32_t word;  ///< storage word of the node across (boundary: erased)
+  std::uint8_t depth;  ///< its depth
+  std::int8_t map;     ///< face map id (FaceMapTables); its face is map / 6
+  bool boundary;
 };
 
 WalkAcross walk_across(const Across& a, int f) {
-  WalkAcross w;
+  WalkAcross w{TetHierarchy::kErased, 0, -1, false};
   w.word = a.word;
   w.depth = a.node.depth;
   w.boundary = a.boundary;
@@ -372,6 +374,19 @@ struct WalkChildren {
   std::array<std::uint32_t, 8> own;
   std::array<std::array<std::uint32_t, 8>, 4> across;  // [f]: decoded on first use (bit f of `ready`)
   unsigned ready = 0;
+  // Bit f: the node across face f is internal at the node's own depth, so a child face on
+  // f looks at one of its children; otherwise the child sees that node itself (the mesh
+  // boundary or a coarser or same-depth leaf). Set by init(), once per node, not per child.
+  unsigned descend = 0;
+
+  void init(const TetHierarchy& h, std::uint32_t word, int depth, const std::array<WalkAcross, 4>& acr) {
+    own = h.child_words(word);
+    for (unsigned f = 0; f < 4; ++f) {
+      const WalkAcross& a = acr[f];
+      const bool refined = !a.boundary && a.depth >= depth && TetHierarchy::state_of_word(a.word) == NodeState::Internal;
+      descend |= (refined ? 1U : 0U) << f;
+    }
+  }
 };
 
 
@@ -383,7 +398,7 @@ void child_across(const TetHierarchy& h, const WalkTables& wt, int pdepth, WalkC
                   const std::array<WalkAcross, 4>& pacr, WalkAcross& out) {
   const auto su = static_cast<std::size_t>(s);
   const auto fu = static_cast<std::size_t>(f);
-  const auto link = wt.tree.face_link[su][fu];
+  const auto& link = wt.tree.face_link[su][fu];  // a reference: a copy went through the stack
   if (link.sibling >= 0) {
     out.word = wc.own[static_cast<std::size_t>(link.sibling)];
     out.depth = static_cast<std::uint8_t>(pdepth + 1);
@@ -392,7 +407,7 @@ void child_across(const TetHierarchy& h, const WalkTables& wt, int pdepth, WalkC
     return;
   }
   const WalkAcross& pa = pacr[static_cast<std::size_t>(link.parent_face)];
-  if (pa.boundary || pa.depth < pdepth || TetHierarchy::state_of_word(pa.word) != NodeState::Internal) {
+  if (((wc.descend >> link.parent_face) & 1U) == 0) {
     out = pa;  // the mesh boundary or a coarser leaf
     return;
   }
@@ -455,26 +470,28 @@ struct RootKeys {
       id[i] = t[o[i]];
     }
   }
+  // Precondition: @p k holds the (−1, 0) filler in every slot (a default PointKey, as
+  // emplace_back made it; filling it again here was a second 32-byte store per key).
+  // Without a branch per coordinate: every pair is written at the next free slot and the
+  // slot advances only for a non-zero weight, so a zero-weight pair is overwritten by the
+  // next kept one or, at the end, is (−1, 0) like the untouched slots after it.
   void make(const BaryKey& key, PointKey& k) const noexcept {
     std::size_t n = 0;
     for (std::size_t i = 0; i < 4; ++i) {
       const std::int32_t w = key[slot[i]];
-      if (w == 0) continue;
-      k.id[n] = id[i];
+      k.id[n] = w != 0 ? id[i] : -1;
       k.weight[n] = w;
-      ++n;
-    }
-    for (; n < 4; ++n) {
-      k.id[n] = -1;
-      k.weight[n] = 0;
+      n += w != 0 ? 1U : 0U;
     }
   }
 };
 
-// Appends the face of root barycentric keys b to out.
-void push_face(const RootKeys& rk, const std::array<BaryKey, 3>& b, std::vector<SurfaceFace>& out) {
-  SurfaceFace& f = out.emplace_back();
-  for (std::size_t i = 0; i < 3; ++i) rk.make(b[i], f[i]);
+// Appends the face of root barycentric keys a, b, c to out.
+void push_face(const RootKeys& rk, const BaryKey& a, const BaryKey& b, const BaryKey& c, std::vector<SurfaceFace>& out) {
+  SurfaceFace& f = out.emplace_back();  // default keys: the filler make() expects
+  rk.make(a, f[0]);
+  rk.make(b, f[1]);
+  rk.make(c, f[2]);
 }
 
 // Emits the parts of face `b` (root barycentric keys in our root, outward from our side)
@@ -487,7 +504,7 @@ void emit_against(const TetHierarchy& h, const FaceMapTables& fm, const RootKeys
   const NodeState st = TetHierarchy::state_of_word(mword);
   if (st == NodeState::Full) return;
   if (st == NodeState::Erased) {
-    push_face(rk, b, out);
+    push_face(rk, b[0], b[1], b[2], out);
     return;
   }
   // Sub-face vertices: 0..2 = corners, 3 + e = midpoint of edge e (e: 0-1, 1-2, 2-0).
@@ -560,12 +577,14 @@ void emit_leaf(const TetHierarchy& h, const WalkTables& wt, const RootKeys& rk, 
     if (a.word == TetHierarchy::kFull) continue;
     std::array<int, 3> order{kFaceVerts[f][0], kFaceVerts[f][1], kFaceVerts[f][2]};
     if (g.flipped) std::swap(order[1], order[2]);
-    const std::array<BaryKey, 3> b{g.vertex[static_cast<std::size_t>(order[0])], g.vertex[static_cast<std::size_t>(order[1])],
-                                   g.vertex[static_cast<std::size_t>(order[2])]};
+    const BaryKey& b0 = g.vertex[static_cast<std::size_t>(order[0])];
+    const BaryKey& b1 = g.vertex[static_cast<std::size_t>(order[1])];
+    const BaryKey& b2 = g.vertex[static_cast<std::size_t>(order[2])];
     if (a.word == TetHierarchy::kErased) {
-      push_face(rk, b, out);
+      push_face(rk, b0, b1, b2, out);  // the keys straight from the geometry, not a copied face
     } else {
-      emit_against(h, wt.maps, rk, b, wt.maps.lead[fu][static_cast<std::size_t>(a.map)][g.flipped ? 1 : 0], a.word, out);
+      emit_against(h, wt.maps, rk, {b0, b1, b2}, wt.maps.lead[fu][static_cast<std::size_t>(a.map)][g.flipped ? 1 : 0],
+                   a.word, out);
     }
   }
 }
@@ -586,7 +605,7 @@ void visit(const TetHierarchy& h, const WalkTables& wt, const RootKeys& rk, int 
     return;
   }
   WalkChildren wc;
-  wc.own = h.child_words(word);
+  wc.init(h, word, depth, acr);
   for (int c = 0; c < 8; ++c) {
     const std::uint32_t cw = wc.own[static_cast<std::size_t>(c)];
     if (cw == TetHierarchy::kErased) {
@@ -874,7 +893,7 @@ std::uint32_t BoundarySurface::rebuild_range(const TetHierarchy& h, std::uint32_
       const int s = static_cast<int>((c >> (3 * (level - d - 1))) & 7U);
       std::array<WalkAcross, 4> cacr;
       WalkChildren wc;
-      wc.own = h.child_words(word);
+      wc.init(h, word, d, acr);
       for (int f = 0; f < 4; ++f) child_across(h, wt, d, wc, s, f, acr, cacr[static_cast<std::size_t>(f)]);
       node = node.child(s);
       word = wc.own[static_cast<std::size_t>(s)];
