@@ -593,35 +593,6 @@ void emit_leaf(const TetHierarchy& h, const WalkTables& wt, const RootKeys& rk, 
 // geometry g, face neighbours acr), walking top-down so every node's neighbours, their
 // states and its geometry come from its parent's in O(1). Erased children and full
 // children with four full neighbours cost one visit each and no further work.
-void visit(const TetHierarchy& h, const WalkTables& wt, const RootKeys& rk, int depth, std::uint32_t word,
-           const NodeGeometry& g, const std::array<WalkAcross, 4>& acr, std::vector<SurfaceFace>& out,
-           std::size_t& visits);
-
-// The part of visit() for child slot c of an internal node (depth, geometry g, face
-// neighbours acr, decoded child words wc): its own visit and its subtree's. On its own so a
-// budgeted chunk rebuild can stop between the children of the chunk's node.
-// NOLINTNEXTLINE(misc-no-recursion): depth ≤ kMaxDepth
-inline void visit_child(const TetHierarchy& h, const WalkTables& wt, const RootKeys& rk, int depth, WalkChildren& wc,
-                        int c, const NodeGeometry& g, const std::array<WalkAcross, 4>& acr, std::vector<SurfaceFace>& out,
-                        std::size_t& visits) {
-  const std::uint32_t cw = wc.own[static_cast<std::size_t>(c)];
-  if (cw == TetHierarchy::kErased) {
-    ++visits;
-    return;
-  }
-  std::array<WalkAcross, 4> cacr;
-  for (int f = 0; f < 4; ++f) child_across(h, wt, depth, wc, c, f, acr, cacr[static_cast<std::size_t>(f)]);
-  const auto cu = static_cast<std::size_t>(c);
-  if (cw == TetHierarchy::kFull) {
-    ++visits;
-    bool exposed = false;
-    for (const WalkAcross& a : cacr) exposed = exposed || a.word != TetHierarchy::kFull;
-    if (exposed) emit_leaf(h, wt, rk, child_geometry(wt.tree, g, cu), cacr, out);
-    return;
-  }
-  visit(h, wt, rk, depth + 1, cw, child_geometry(wt.tree, g, cu), cacr, out, visits);
-}
-
 // NOLINTNEXTLINE(misc-no-recursion): depth ≤ kMaxDepth
 void visit(const TetHierarchy& h, const WalkTables& wt, const RootKeys& rk, int depth, std::uint32_t word,
            const NodeGeometry& g, const std::array<WalkAcross, 4>& acr, std::vector<SurfaceFace>& out,
@@ -635,7 +606,24 @@ void visit(const TetHierarchy& h, const WalkTables& wt, const RootKeys& rk, int 
   }
   WalkChildren wc;
   wc.init(h, word, depth, acr);
-  for (int c = 0; c < 8; ++c) visit_child(h, wt, rk, depth, wc, c, g, acr, out, visits);
+  for (int c = 0; c < 8; ++c) {
+    const std::uint32_t cw = wc.own[static_cast<std::size_t>(c)];
+    if (cw == TetHierarchy::kErased) {
+      ++visits;
+      continue;
+    }
+    std::array<WalkAcross, 4> cacr;
+    for (int f = 0; f < 4; ++f) child_across(h, wt, depth, wc, c, f, acr, cacr[static_cast<std::size_t>(f)]);
+    const auto cu = static_cast<std::size_t>(c);
+    if (cw == TetHierarchy::kFull) {
+      ++visits;
+      bool exposed = false;
+      for (const WalkAcross& a : cacr) exposed = exposed || a.word != TetHierarchy::kFull;
+      if (exposed) emit_leaf(h, wt, rk, child_geometry(wt.tree, g, cu), cacr, out);
+      continue;
+    }
+    visit(h, wt, rk, depth + 1, cw, child_geometry(wt.tree, g, cu), cacr, out, visits);
+  }
 }
 
 }  // namespace
@@ -705,15 +693,11 @@ void BoundarySurface::rebuild_all(const TetHierarchy& hierarchy) {
   m_rebuilt.clear();
   m_rebuilt_chunks.clear();
   m_dirty.clear();
-  m_partial.valid = false;
   for (std::size_t r = 0; r < n; ++r) mark_root(static_cast<std::uint32_t>(r));
   rebuild_ranges(hierarchy);
 }
 
-void BoundarySurface::mark_root(std::uint32_t r) {
-  drop_partial_in(r, 0, m_full_chunks);
-  m_dirty.push_back({r, 0, m_full_chunks});
-}
+void BoundarySurface::mark_root(std::uint32_t r) { m_dirty.push_back({r, 0, m_full_chunks}); }
 
 namespace {
 
@@ -747,7 +731,6 @@ const std::array<std::array<std::uint8_t, 16>, 8>& parent_face_masks() {
 void BoundarySurface::mark_node(const TetHierarchy& /*h*/, const NodeRef& node) {
   const int level = m_options.chunk_level;
   const auto [lo, hi] = chunk_range(node, level);
-  drop_partial_in(node.root, lo, hi);
   if (m_dirty.empty() || m_dirty.back().root != node.root || m_dirty.back().lo != lo || m_dirty.back().hi != hi)
     m_dirty.push_back({node.root, lo, hi});
   const auto& up = parent_face_masks();
@@ -792,7 +775,6 @@ void BoundarySurface::mark_faces(const TetHierarchy& h) {
       const Across& a = acr[static_cast<std::size_t>(g)];
       if (a.boundary) continue;
       const auto [nlo, nhi] = chunk_range(a.node, level);
-      drop_partial_in(a.node.root, nlo, nhi);
       m_dirty.push_back({a.node.root, nlo, nhi});
     }
   }
@@ -807,7 +789,6 @@ void BoundarySurface::update(const TetHierarchy& hierarchy, std::span<const std:
 void BoundarySurface::update(const TetHierarchy& hierarchy, std::span<const std::uint32_t> changed_roots,
                              std::span<const std::uint8_t> changed_faces) {
   m_dirty.clear();
-  m_partial.valid = false;  // its chunk is no longer queued
   for (std::size_t i = 0; i < changed_roots.size(); ++i) {
     const std::uint32_t r = changed_roots[i];
     mark_root(r);
@@ -921,41 +902,9 @@ std::uint32_t BoundarySurface::rebuild_range(const TetHierarchy& h, std::uint32_
     }
     const std::uint32_t span = 1U << (3 * (level - d));
     const std::uint32_t ulo = c & ~(span - 1U);
-    const bool resume = m_partial.valid && m_partial.root == r && m_partial.chunk == ulo;
-    if (max_node_visits > 0 && TetHierarchy::state_of_word(word) == NodeState::Internal) {
-      // Budgeted: the chunk's node is walked child by child into m_partial.faces (the chunk
-      // keeps its old faces until the walk is complete), and the walk may stop after any
-      // child, to resume at the next one in a later update unless the chunk is marked again
-      // in between (then it starts over: mark_node, mark_faces).
-      std::uint32_t first = 0;
-      if (resume) {
-        first = m_partial.next;
-      } else {
-        m_partial.faces.clear();
-        ++m_visits;  // the chunk's node itself, as visit() counts it
-      }
-      m_partial.valid = false;
-      const NodeGeometry g = h.geometry(node);
-      WalkChildren wc;
-      wc.init(h, word, d, acr);
-      for (std::uint32_t k = first; k < 8; ++k) {
-        visit_child(h, wt, rk, d, wc, static_cast<int>(k), g, acr, m_partial.faces, m_visits);
-        if (k < 7 && m_visits >= max_node_visits) {
-          m_partial.valid = true;
-          m_partial.root = r;
-          m_partial.chunk = ulo;
-          m_partial.next = k + 1;
-          m_range_end = hi;
-          return ulo;
-        }
-      }
-      ch[ulo].swap(m_partial.faces);  // the old faces stay behind as the next walk's buffer
-    } else {
-      if (resume) m_partial.valid = false;  // rebuilt whole here (an unbudgeted update or flush)
-      auto& out = ch[ulo];
-      out.clear();
-      visit(h, wt, rk, node.depth, word, h.geometry(node), acr, out, m_visits);
-    }
+    auto& out = ch[ulo];
+    out.clear();
+    visit(h, wt, rk, node.depth, word, h.geometry(node), acr, out, m_visits);
     m_rebuilt_chunks.push_back({r, ulo});
     for (std::uint32_t k = ulo + 1; k < ulo + span; ++k) {
       if (ch[k].empty()) continue;

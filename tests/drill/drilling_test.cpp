@@ -478,52 +478,6 @@ TEST(Erosion, VisitBudgetSplitsTheWorkButNotTheResult) {
   }
 }
 
-TEST(BoundarySurface, BudgetedUpdatesStopInsideAChunkAndResumeToAFullRebuild) {
-  // Budgeted v_list updates of 20 visits stop between the children of a chunk's node and
-  // resume there later (or start the chunk over when a change marks it again). Never
-  // flushed: budgeted updates alone, continued until nothing waits, must give every root's
-  // v_list of a full rebuild, a closed surface enclosing the leaf volume, and no update may
-  // do more than the budget plus one child sub-tree of a chunk's node.
-  const std::vector<Vec3> centres = burr_centres_in_block(16, 7);
-  constexpr std::size_t kBudget = 20;
-  for (const int level : {0, 1, 2}) {
-    TetHierarchy h(make_block({10, 8, 6}, 2.0));
-    BoundarySurface surface(h, {.chunk_level = level});
-    constexpr int kDepth = 4;
-    Eroder eroder({.removal_rate_mm3_per_s = 0.0, .max_depth = kDepth, .max_node_visits = 300});
-    // Visits of a full sub-tree below a child of a chunk's node (depth level + 1 .. kDepth).
-    std::size_t subtree = 0;
-    for (int d = level + 1; d <= kDepth; ++d) subtree = subtree * 8 + 1;
-    std::size_t paused_inside = 0, updates = 0;
-    auto update = [&] {
-      surface.update(h, eroder.changed_nodes(), kBudget);
-      eroder.clear_changed_roots();
-      ++updates;
-      EXPECT_LE(surface.last_visits(), kBudget + subtree) << "level " << level << " update " << updates;
-      // Work done but no chunk list rewritten: only a walk stopped inside a chunk does that.
-      if (surface.last_visits() > 0 && surface.last_rebuilt_chunks().empty()) ++paused_inside;
-    };
-    for (const auto& c : centres) {
-      eroder.enqueue(c, 1.2, 1.0, 0.01);
-      (void)eroder.run(h, 300);
-      update();
-    }
-    while (eroder.has_pending()) {
-      (void)eroder.run(h, 300);
-      update();
-    }
-    while (surface.has_pending()) update();
-    EXPECT_GT(paused_inside, 10U) << "level " << level << ": no walk stopped inside a chunk, the test does not test it";
-    const BoundarySurface fresh(h, {.chunk_level = level});
-    for (std::size_t r = 0; r < h.root_count(); ++r)
-      ASSERT_TRUE(fresh.v_list(r) == surface.v_list(r)) << "level " << level << " root " << r;
-    const auto mesh = assemble_surface(surface.v_lists(), h.vertices());
-    const auto check = check_surface(mesh);
-    EXPECT_EQ(check.boundary_edges, 0U);
-    EXPECT_TRUE(test::rel_near(check.volume, h.material_volume(), 1e-9));
-  }
-}
-
 // Sibling blocks of root r's tree: (8 full leaves, 8 erased leaves, others).
 std::array<std::size_t, 3> uniform_leaf_blocks(const TetHierarchy& h, std::size_t r) {
   std::array<std::size_t, 3> n{};

@@ -82,12 +82,9 @@ class BoundarySurface {
   /// The result equals a full rebuild. last_rebuilt() lists the roots touched and
   /// last_rebuilt_chunks() the chunk lists rewritten.
   void update(const TetHierarchy& hierarchy, std::span<const NodeRef> changed_nodes);
-  /// As above, but stops once @p max_node_visits nodes were walked (0 = unlimited): after
-  /// the child sub-tree in progress of the chunk's node (1/8 of a chunk). The chunks not
-  /// rebuilt yet stay queued for the next update or flush(), so until then the v_lists lag
-  /// the tree; a chunk stopped in keeps its old faces until its walk resumes (next budgeted
-  /// update, at the next child, unless a change marks the chunk again: then it starts over)
-  /// and is complete.
+  /// As above, but stops once @p max_node_visits nodes were walked (after the chunk in
+  /// progress; 0 = unlimited): the chunks not rebuilt yet stay queued for the next update or
+  /// flush(), so until then the v_lists lag the tree.
   void update(const TetHierarchy& hierarchy, std::span<const NodeRef> changed_nodes, std::size_t max_node_visits);
   /// True when chunks wait to be rebuilt (a budgeted update stopped early).
   [[nodiscard]] bool has_pending() const noexcept { return !m_dirty.empty(); }
@@ -125,11 +122,6 @@ class BoundarySurface {
   void mark_node(const TetHierarchy& hierarchy, const NodeRef& node);
   void mark_faces(const TetHierarchy& hierarchy);
   void mark_root(std::uint32_t r);
-  /// Forgets the paused chunk walk when its chunk lies in chunks [lo, hi) of root r (marked
-  /// again, so the part already walked may be stale).
-  void drop_partial_in(std::uint32_t r, std::uint32_t lo, std::uint32_t hi) noexcept {
-    if (m_partial.valid && m_partial.root == r && lo <= m_partial.chunk && m_partial.chunk < hi) m_partial.valid = false;
-  }
 
   BoundarySurfaceOptions m_options;
   std::uint32_t m_full_chunks = 1;  // 8^chunk_level
@@ -148,14 +140,6 @@ class BoundarySurface {
   std::vector<std::uint8_t> m_mark;
   std::size_t m_visits = 0;
   std::uint32_t m_range_end = 0;  // end of the range rebuild_range stopped in (0: it finished)
-  /// A budgeted chunk walk stopped between two children of the chunk's node: chunk `chunk`
-  /// of root `root`, children before `next` walked, their faces in `faces`.
-  struct PartialChunk {
-    bool valid = false;
-    std::uint32_t root = 0, chunk = 0, next = 0;
-    std::vector<SurfaceFace> faces;
-  };
-  PartialChunk m_partial;
 };
 
 /// The welded, crack-free triangle mesh (mm) of the faces in @p v_lists on mesh vertices
