@@ -477,9 +477,7 @@ bool grid_pairs(const TriangleMesh& mesh, const Grid& grid, bool threaded, bool 
   std::size_t blocks = 1;
   if (threaded) {
     const auto workers = static_cast<std::size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
-    // From 4096 triangles on (the balloon's surfaces, 8–40k triangles, were mostly searched in
-    // one block before): the pairs are the same set whatever the blocks, sorted below.
-    blocks = std::clamp<std::size_t>(n / 2048, 1, workers);
+    blocks = std::clamp<std::size_t>(n / 8192, 1, workers);
   }
   Search search{mesh, grid, first_only, std::vector<CellBox>(n), {}, {}, entry_budget(n / blocks + 1),
                 visit_budget(n / blocks + 1)};

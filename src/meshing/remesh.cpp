@@ -5,13 +5,11 @@
 #include "ido/meshing/remesh.h"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <queue>
 #include <string>
 
 #include "ido/core/error.h"
-#include "ido/core/parallel.h"
 
 namespace ido::meshing {
 
@@ -124,10 +122,9 @@ SurfaceRemesher::SurfaceRemesher(const geometry::TriangleMesh& mesh, std::vector
       throw InvalidInput("remesh: triangle " + std::to_string(t) + " repeats a vertex");
   }
   // A closed, consistently oriented manifold edge runs once each way: around every vertex a,
-  // each a→b of its triangles occurs once, and so does b→a. Checked per vertex in parallel;
-  // the error names the lowest failing vertex, as a serial scan would.
-  auto first_bad_neighbour = [&](std::int32_t a, std::vector<std::int32_t>& outgoing,
-                                 std::vector<std::int32_t>& incoming) -> std::int32_t {
+  // each a→b of its triangles occurs once, and so does b→a.
+  std::vector<std::int32_t> outgoing, incoming;
+  for (std::int32_t a = 0; a < static_cast<std::int32_t>(nv); ++a) {
     outgoing.clear();
     incoming.clear();
     for (std::int32_t t : m_vertex_triangles[std::size_t(a)]) {
@@ -138,29 +135,8 @@ SurfaceRemesher::SurfaceRemesher(const geometry::TriangleMesh& mesh, std::vector
     }
     for (std::int32_t b : outgoing)
       if (std::count(outgoing.begin(), outgoing.end(), b) != 1 || std::count(incoming.begin(), incoming.end(), b) != 1)
-        return b;
-    return -1;
-  };
-  std::atomic<std::int64_t> first_bad{nv};
-  parallel_for_ranges(
-      std::size_t(nv),
-      [&](std::size_t begin, std::size_t end) {
-        std::vector<std::int32_t> outgoing, incoming;
-        for (std::size_t a = begin; a < end; ++a)
-          if (first_bad_neighbour(std::int32_t(a), outgoing, incoming) >= 0) {
-            std::int64_t seen = first_bad.load(std::memory_order_relaxed);
-            while (std::int64_t(a) < seen && !first_bad.compare_exchange_weak(seen, std::int64_t(a))) {
-            }
-            return;  // later vertices of this range cannot be the lowest
-          }
-      },
-      true, 2048);
-  if (const std::int64_t bad = first_bad.load(); bad < nv) {
-    std::vector<std::int32_t> outgoing, incoming;
-    const auto a = static_cast<std::int32_t>(bad);
-    const std::int32_t b = first_bad_neighbour(a, outgoing, incoming);
-    throw InvalidInput("remesh: the mesh is not a closed, consistently oriented 2-manifold (edge " +
-                       std::to_string(std::min(a, b)) + "-" + std::to_string(std::max(a, b)) + ")");
+        throw InvalidInput("remesh: the mesh is not a closed, consistently oriented 2-manifold (edge " +
+                           std::to_string(std::min(a, b)) + "-" + std::to_string(std::max(a, b)) + ")");
   }
 }
 

@@ -143,7 +143,6 @@ struct Balloon::State {
     int reused = 0;
   };
   std::vector<WallSearch> wall_search;
-  VertexCorners corners;  // of `triangles`; emptied by set_mesh
 
   // The fitter whose σ is nearest the blur along @p normal: pre-smoothing plus the scanner's
   // blur and the voxel's partial-volume box along each grid axis.
@@ -173,7 +172,6 @@ struct Balloon::State {
     }
     particles = std::move(p);
     triangles = m.triangles;
-    corners = {};
   }
   double volume() const {
     double v = 0;
@@ -245,10 +243,7 @@ struct Balloon::State {
   // One explicit step of the first-order dynamics. edge_stage switches the intensity
   // inflation for the edge attraction where a wall is within reach.
   void move(bool edge_stage) {
-    // The corner lists change only with the triangles (a remesh or a repair): built once per
-    // connectivity, they let the differentials be gathered per vertex in parallel.
-    if (corners.start.size() != particles.size() + 1) corners = vertex_corners(particles.size(), triangles);
-    const auto d = surface_differentials(particles.positions(), triangles, corners, opt.threaded);
+    const auto d = surface_differentials(particles.positions(), triangles);
     auto& x = particles.positions();
     auto& v = particles.velocities();
     const std::size_t n = x.size();

@@ -6,7 +6,6 @@
 #include <vector>
 
 #include "ido/core/error.h"
-#include "ido/core/parallel.h"
 
 namespace ido::segment {
 
@@ -34,61 +33,6 @@ SurfaceDifferentials surface_differentials(const std::vector<Vec3>& x, const std
     d.umbrella_mm[v] = d.umbrella_mm[v] / double(count[v]) - x[v];
     d.mean_edge2_mm2[v] /= double(count[v]);
   }
-  return d;
-}
-
-VertexCorners vertex_corners(std::size_t vertices, const std::vector<Tri>& triangles) {
-  VertexCorners c;
-  c.start.assign(vertices + 1, 0);
-  for (const Tri& t : triangles)
-    for (std::int32_t v : t) {
-      if (v < 0 || std::size_t(v) >= vertices) throw InvalidInput("vertex corners: triangle vertex index out of range");
-      ++c.start[std::size_t(v) + 1];
-    }
-  for (std::size_t v = 0; v < vertices; ++v) c.start[v + 1] += c.start[v];
-  c.corners.resize(3 * triangles.size());
-  // A counting sort by vertex, filled in triangle order: each vertex's corners ascend.
-  std::vector<std::int32_t> fill(c.start.begin(), c.start.end() - 1);
-  for (std::size_t t = 0; t < triangles.size(); ++t)
-    for (int k = 0; k < 3; ++k) c.corners[std::size_t(fill[std::size_t(triangles[t][k])]++)] = std::int32_t(3 * t) + k;
-  return c;
-}
-
-SurfaceDifferentials surface_differentials(const std::vector<Vec3>& x, const std::vector<Tri>& triangles,
-                                           const VertexCorners& corners, bool threaded) {
-  const std::size_t n = x.size();
-  if (corners.start.size() != n + 1 || corners.corners.size() != 3 * triangles.size())
-    throw InvalidInput("surface differentials: the corner lists do not match the mesh");
-  SurfaceDifferentials d;
-  d.normals.assign(n, Vec3::Zero());
-  d.umbrella_mm.assign(n, Vec3::Zero());
-  d.mean_edge2_mm2.assign(n, 0.0);
-  parallel_for(
-      n,
-      [&](std::size_t v) {
-        const auto b = std::size_t(corners.start[v]), e = std::size_t(corners.start[v + 1]);
-        if (b == e) return;
-        // The serial version's sums, term by term in the same order (no FMA contraction: the
-        // build targets baseline x86-64), so the results are the same doubles.
-        Vec3 normal = Vec3::Zero(), umbrella = Vec3::Zero();
-        double edge2 = 0;
-        for (std::size_t c = b; c < e; ++c) {
-          const Tri& t = triangles[std::size_t(corners.corners[c]) / 3];
-          const int k = corners.corners[c] % 3;
-          const Vec3 an = (x[t[1]] - x[t[0]]).cross(x[t[2]] - x[t[0]]);
-          const std::int32_t w = t[(k + 1) % 3];
-          normal += an;
-          umbrella += x[w];
-          edge2 += (x[w] - x[v]).squaredNorm();
-        }
-        const double count = double(e - b);
-        const double l = normal.norm();
-        if (l > 0) normal /= l;
-        d.normals[v] = normal;
-        d.umbrella_mm[v] = umbrella / count - x[v];
-        d.mean_edge2_mm2[v] = edge2 / count;
-      },
-      threaded, 1024);
   return d;
 }
 

@@ -183,8 +183,8 @@ TEST(SurfaceRemesher, RejectsOpenMesh) {
   EXPECT_THROW((SurfaceRemesher{sphere(1.0, 0), std::vector<std::uint8_t>(2, 0)}), InvalidInput);
 }
 
-// The manifold check runs per vertex in parallel; its message names the defect a serial scan
-// meets first (the lowest vertex), whichever chunk finds one first.
+// The manifold check's message names the defect met first in vertex order (the lowest vertex
+// of the two turned-over triangles), so a caller can find it.
 TEST(SurfaceRemesher, NonManifoldMessageNamesTheLowestVertex) {
   auto m = sphere(1.0, 5);  // 4 098 vertices: several chunks
   ASSERT_GT(m.vertices.size(), 4096u);

@@ -80,36 +80,6 @@ TEST(SurfaceDifferentials, UmbrellaCurvatureOfSphere) {
   }
 }
 
-// The per-vertex gather over the corner lists sums each vertex's triangles in the order the
-// serial scatter does: the same doubles, with and without threads, on an irregular surface
-// (a jittered, remeshed sphere: valences 3 to 9, vertex order unrelated to triangle order).
-TEST(SurfaceDifferentials, CornerListsGiveTheSameBitsThreadedOrNot) {
-  geometry::TriangleMesh m = balloon_icosphere(Vec3(1, 2, 3), 7.0, 4);
-  std::mt19937 rng(5);
-  std::uniform_real_distribution<double> u(-0.3, 0.3);
-  for (Vec3& v : m.vertices) v += Vec3(u(rng), u(rng), u(rng));
-  meshing::RemeshOptions ro;
-  ro.target_edge_mm = 0.45;
-  m = meshing::remesh(m, ro);
-  ASSERT_GT(m.vertices.size(), 3000u);  // several parallel chunks
-  const auto ref = surface_differentials(m.vertices, m.triangles);
-  const VertexCorners c = vertex_corners(m.vertices.size(), m.triangles);
-  for (bool threaded : {false, true}) {
-    const auto d = surface_differentials(m.vertices, m.triangles, c, threaded);
-    ASSERT_EQ(d.normals.size(), ref.normals.size());
-    for (std::size_t i = 0; i < ref.normals.size(); ++i) {
-      // Bitwise: == on doubles is the property here (the same sums in the same order).
-      ASSERT_TRUE(d.normals[i] == ref.normals[i]) << i;
-      ASSERT_TRUE(d.umbrella_mm[i] == ref.umbrella_mm[i]) << i;
-      ASSERT_TRUE(d.mean_edge2_mm2[i] == ref.mean_edge2_mm2[i]) << i;
-    }
-  }
-  // Corner lists of another mesh are refused.
-  EXPECT_THROW((void)surface_differentials(m.vertices, m.triangles, vertex_corners(m.vertices.size() - 1, {}), true),
-               InvalidInput);
-  EXPECT_THROW((void)vertex_corners(2, m.triangles), InvalidInput);
-}
-
 TEST(EdgeOffset, FindsBlurredStepHalfway) {
   // Bright half-space x < 10.3 mm blurred by a Gaussian of σ = 1 mm: the wall (steepest
   // point of the erfc profile) is at 10.3.

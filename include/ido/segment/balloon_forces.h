@@ -24,27 +24,6 @@ struct SurfaceDifferentials {
 [[nodiscard]] SurfaceDifferentials surface_differentials(const std::vector<Vec3>& positions_mm,
                                                          const std::vector<Tri>& triangles);
 
-/// The triangle corners at each vertex, in ascending triangle order (a compressed row list):
-/// vertex v's corners are corners[start[v] .. start[v + 1]), each 3 t + k with
-/// triangles[t][k] == v. Depends only on the connectivity, so a caller that moves the vertices
-/// of a fixed triangle list builds it once.
-struct VertexCorners {
-  std::vector<std::int32_t> start;    ///< vertices + 1 offsets into corners
-  std::vector<std::int32_t> corners;  ///< 3 × triangle + corner index
-};
-
-/// Builds the VertexCorners of @p triangles over @p vertices vertices.
-/// @throws ido::InvalidInput if a triangle names a vertex outside [0, vertices).
-[[nodiscard]] VertexCorners vertex_corners(std::size_t vertices, const std::vector<Tri>& triangles);
-
-/// The same quantities as surface_differentials(positions_mm, triangles), bit for bit, gathered
-/// per vertex over @p corners (built from these triangles and this vertex count) and so
-/// computed in parallel when @p threaded: each vertex sums its triangles in the same
-/// (ascending) order as the serial scatter does.
-[[nodiscard]] SurfaceDifferentials surface_differentials(const std::vector<Vec3>& positions_mm,
-                                                         const std::vector<Tri>& triangles,
-                                                         const VertexCorners& corners, bool threaded = true);
-
 /// Mean curvature (1/mm) estimated from the umbrella operator: on a sphere of radius R with
 /// edge length ℓ the one-ring centroid lies ℓ²/(2R) inside the vertex, so
 /// H ≈ −2 (L·n) / ℓ² (positive where the surface is convex; Desbrun et al., "Implicit
