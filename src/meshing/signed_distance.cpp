@@ -199,26 +199,66 @@ image::Volume<float> signed_distance(const geometry::TriangleMesh& surface,
         if (seen[idx] && inside_at(std::int64_t(idx))) make_inside(std::int64_t(idx));
       },
       options.threaded, 1024);
-  // The others: one evaluation per component of safe steps.
-  std::vector<std::int64_t> stack;
-  for (std::int64_t start = 0; start < total; ++start) {
-    if (seen[start]) continue;
-    const bool inside = inside_at(start);
-    stack.push_back(start);
-    seen[start] = 1;
-    while (!stack.empty()) {
-      const std::int64_t v = stack.back();
-      stack.pop_back();
-      for_safe_neighbours(v, [&](std::int64_t w) {
-        if (!seen[w]) {
-          seen[w] = 1;
-          stack.push_back(w);
-        }
-        return false;
-      });
-      if (inside) make_inside(v);
+  // The others: one evaluation per component of safe steps, at the component's lowest index
+  // (where a scan in index order would start it). Components by a concurrent union–find in
+  // which a root is only ever linked under a smaller index, so every component ends with its
+  // lowest index as root whatever the threads' interleaving: the same evaluations, the same
+  // signs as a serial flood fill.
+  std::vector<std::atomic<std::int64_t>> parent(dist.size());
+  parallel_for(
+      static_cast<std::size_t>(total), [&](std::size_t v) { parent[v].store(std::int64_t(v), std::memory_order_relaxed); },
+      options.threaded, 4096);
+  auto find = [&](std::int64_t v) {
+    for (;;) {
+      const std::int64_t p = parent[std::size_t(v)].load(std::memory_order_relaxed);
+      if (p == v) return v;
+      // Path halving: any ancestor is a valid parent (a root's index only falls).
+      const std::int64_t gp = parent[std::size_t(p)].load(std::memory_order_relaxed);
+      std::int64_t expected = p;
+      if (gp != p) parent[std::size_t(v)].compare_exchange_weak(expected, gp, std::memory_order_relaxed);
+      v = gp;
     }
-  }
+  };
+  auto unite = [&](std::int64_t a, std::int64_t b) {
+    for (;;) {
+      a = find(a);
+      b = find(b);
+      if (a == b) return;
+      if (a < b) std::swap(a, b);  // link the larger root under the smaller
+      std::int64_t expected = a;
+      if (parent[std::size_t(a)].compare_exchange_strong(expected, b, std::memory_order_relaxed)) return;
+    }
+  };
+  // Each safe step once, from its lower end (+1 along each axis).
+  parallel_for(
+      static_cast<std::size_t>(total),
+      [&](std::size_t idx) {
+        if (seen[idx]) return;
+        const auto v = std::int64_t(idx);
+        const std::int64_t c[3] = {v % n[0], (v / n[0]) % n[1], v / (n[0] * n[1])};
+        const double bv = bound(idx);
+        for (int a = 0; a < 3; ++a) {
+          if (c[a] + 1 >= n[a]) continue;
+          const std::int64_t w = v + stride[a];
+          if (bv + bound(std::size_t(w)) > need[a]) unite(v, w);
+        }
+      },
+      options.threaded, 4096);
+  // Roots evaluate the winding number; every member takes its root's sign.
+  std::vector<std::uint8_t> root_inside(dist.size(), 0);
+  parallel_for(
+      static_cast<std::size_t>(total),
+      [&](std::size_t idx) {
+        if (!seen[idx] && parent[idx].load(std::memory_order_relaxed) == std::int64_t(idx))
+          root_inside[idx] = inside_at(std::int64_t(idx)) ? 1 : 0;
+      },
+      options.threaded, 1024);
+  parallel_for(
+      static_cast<std::size_t>(total),
+      [&](std::size_t idx) {
+        if (!seen[idx] && root_inside[std::size_t(find(std::int64_t(idx)))]) make_inside(std::int64_t(idx));
+      },
+      options.threaded, 4096);
   return out;
 }
 

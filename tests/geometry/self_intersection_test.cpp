@@ -224,6 +224,21 @@ TEST(SelfIntersection, FoldedCoplanarNeighboursAndDuplicates) {
   EXPECT_TRUE(self_intersections(t).empty());
 }
 
+// From 16 384 triangles on the threaded search cuts the triangles into index blocks (one per
+// worker) with a cross pass between them: the pairs must be those of the one-block serial pass
+// (checked against the brute force above), also where many pairs straddle the blocks (the
+// folded 20k sphere; the two 5k spheres stay below the threshold, one block either way).
+TEST(SelfIntersection, ThreadedBlocksFindTheSerialPairs) {
+  const TriangleMesh folded = test::jittered(icosphere(Vec3::Zero(), 1.0, 5), 0.02, 3);  // 20 480 triangles
+  const TriangleMesh two = test::merged(icosphere(Vec3(0, 0, 0), 1.0, 4), icosphere(Vec3(1, 0.1, 0), 1.0, 4));
+  for (const TriangleMesh* m : {&folded, &two}) {
+    const Pairs serial = self_intersections(*m, {.threaded = false});
+    EXPECT_FALSE(serial.empty());
+    EXPECT_EQ(self_intersections(*m, {.threaded = true}), serial);
+    EXPECT_TRUE(has_self_intersections(*m, {.threaded = true}));
+  }
+}
+
 TEST(SelfIntersection, EmptyAndSingle) {
   EXPECT_TRUE(self_intersections(TriangleMesh{}).empty());
   TriangleMesh one;

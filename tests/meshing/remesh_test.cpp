@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "ido/meshing/remesh.h"
 
+#include <algorithm>
 #include <cmath>
+#include <string>
 #include <map>
 #include <set>
 
@@ -179,6 +181,26 @@ TEST(SurfaceRemesher, RejectsOpenMesh) {
   bad.triangles[0][0] = 99;
   EXPECT_THROW(SurfaceRemesher{bad}, InvalidInput);
   EXPECT_THROW((SurfaceRemesher{sphere(1.0, 0), std::vector<std::uint8_t>(2, 0)}), InvalidInput);
+}
+
+// The manifold check's message names the defect met first in vertex order (the lowest vertex
+// of the two turned-over triangles), so a caller can find it.
+TEST(SurfaceRemesher, NonManifoldMessageNamesTheLowestVertex) {
+  auto m = sphere(1.0, 5);  // 4 098 vertices: several chunks
+  ASSERT_GT(m.vertices.size(), 4096u);
+  // Two triangles turned over: their edges run the same way as their neighbours'.
+  const std::size_t late = m.triangles.size() - 1, early = m.triangles.size() / 2;
+  std::swap(m.triangles[late][1], m.triangles[late][2]);
+  std::swap(m.triangles[early][1], m.triangles[early][2]);
+  const std::int32_t lowest = std::min({m.triangles[early][0], m.triangles[early][1], m.triangles[early][2],
+                                        m.triangles[late][0], m.triangles[late][1], m.triangles[late][2]});
+  try {
+    SurfaceRemesher r{m};
+    FAIL() << "accepted a mesh with turned-over triangles";
+  } catch (const InvalidInput& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("(edge " + std::to_string(lowest) + "-"), std::string::npos) << what;
+  }
 }
 
 }  // namespace

@@ -79,6 +79,36 @@ TEST(SignedDistance, SphereMatchesAnalyticDistanceAndSign) {
   EXPECT_GT(band, 1000);
 }
 
+// The sign components (outside, and the inside of each of two spheres, one of which has
+// triangles left out of the distance) come from a concurrent union–find whose roots are the
+// components' lowest indices: the field must be the serial one bit for bit, and signed right.
+TEST(SignedDistance, ThreadedComponentsGiveTheSerialField) {
+  geometry::TriangleMesh m = sphere(Vec3(-4, 0, 0), 3.0, 4);
+  const auto second = sphere(Vec3(4.5, 0.3, 0), 3.5, 4);
+  const auto base = static_cast<std::int32_t>(m.vertices.size());
+  m.vertices.insert(m.vertices.end(), second.vertices.begin(), second.vertices.end());
+  for (const Tri& t : second.triangles) m.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+  const image::Volume<float> grid({40, 24, 22}, Vec3(0.5, 0.6, 0.7), Vec3(-9, -7, -7.5));
+  SignedDistanceOptions so;
+  so.band_mm = 1.0;
+  so.distance_triangles.assign(m.triangles.size(), 1);
+  for (std::size_t t = m.triangles.size() - 40; t < m.triangles.size(); ++t) so.distance_triangles[t] = 0;
+  so.threaded = false;
+  const auto serial = signed_distance(m, grid, so);
+  so.threaded = true;
+  const auto threaded = signed_distance(m, grid, so);
+  ASSERT_EQ(serial.data().size(), threaded.data().size());
+  for (std::size_t i = 0; i < serial.data().size(); ++i) ASSERT_EQ(serial.data()[i], threaded.data()[i]) << i;
+  auto at = [&](const Vec3& p) {
+    const Vec3 idx = grid.world_to_index(p);
+    return threaded(std::lround(idx[0]), std::lround(idx[1]), std::lround(idx[2]));
+  };
+  EXPECT_LT(at(Vec3(-4, 0, 0)), 0.0f);
+  EXPECT_LT(at(Vec3(4.5, 0.3, 0)), 0.0f);
+  EXPECT_GT(at(Vec3(0.3, 0, 0)), 0.0f);
+  EXPECT_GT(at(Vec3(-8.5, -6.5, -7)), 0.0f);
+}
+
 TEST(SignedDistance, RejectsBadInput) {
   const image::Volume<float> grid({4, 4, 4});
   EXPECT_THROW((void)signed_distance(geometry::TriangleMesh{}, grid), InvalidInput);
