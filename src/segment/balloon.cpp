@@ -126,6 +126,7 @@ struct Balloon::State {
   std::int64_t frozen_pending = 0;
   bool background_decided = false;
   int background_side = 0;  // see first_transition_limit
+  double background_departure = 0;  // |surroundings − reference|, see edge_offset_along_normal
   // The thin-layer wall model of the edge stage: fitters for blur σ = plateau_sigma0 +
   // q · plateau_dsigma (mm), q = 0, 1, ...; the blur along a normal picks one (plateau_for).
   std::vector<PlateauProfileFitter> plateau;
@@ -263,6 +264,24 @@ struct Balloon::State {
       for (int e : dir) (e > 0 ? up : down) += e != 0 ? 1 : 0;
       background_side = up > down ? 1 : -1;
       background_decided = true;
+      // The surroundings' level: the median over the surface of the farthest-from-band value
+      // on the background side within two searches out along the normal.
+      if (!model.accept_brighter) {
+        std::vector<double> level(n, 0.0);
+        parallel_for(
+            n,
+            [&](std::size_t i) {
+              double e = smoothed.sample(x[i]);
+              for (double q = 0.2 * h; q <= 2.0 * search; q += 0.2 * h) {
+                const double v = smoothed.sample(x[i] + d.normals[i] * q);
+                e = background_side > 0 ? std::max(e, v) : std::min(e, v);
+              }
+              level[i] = e;
+            },
+            opt.threaded, 512);
+        std::nth_element(level.begin(), level.begin() + std::ptrdiff_t(n / 2), level.end());
+        background_departure = std::abs(level[n / 2] - model.reference);
+      }
     }
     // Pass 1: the normal displacement each vertex asks for.
     std::vector<double> normal_mm(n, 0.0);
@@ -285,50 +304,46 @@ struct Balloon::State {
           }
           const double I = smoothed.sample(x[i]);
           if (edge_stage) {
+            std::optional<double> t;
             if (reuse) {
               WallSearch& w = wall_search[i];
               if (w.valid && w.reused < opt.edge_reuse_steps && (x[i] - w.position).norm() <= reuse_move_mm &&
                   nrm.dot(w.normal) >= reuse_cos) {
                 ++w.reused;
                 searched[i] = 2;
-                if (w.found) {
-                  // The same wall point, read along the present normal; the curvature term as below.
-                  const double H = umbrella_mean_curvature(d.umbrella_mm[i], nrm, d.mean_edge2_mm2[i]);
-                  normal_mm[i] = (w.wall - x[i]).dot(nrm) + sigma2 * std::clamp(H, -1.0 / h, 1.0 / h);
-                  snapped[i] = 1;
-                } else {
-                  normal_mm[i] = step * opt.weights.inflation * inflation_speed(I, model);
-                }
-                return;
+                if (w.found) t = (w.wall - x[i]).dot(nrm);  // the same wall point, along the present normal
               }
             }
-            searched[i] = 1;
-            auto t = edge_offset_along_normal(smoothed, x[i], nrm, model, search, 0.2 * h, min_rise, h);
-            if (t && model.accept_brighter) {
-              // Bone: the outer fall of a thin cortex that the blur has lowered is read by the
-              // three-plateau fit (marrow, cortex, surroundings), not at the half-way level.
-              if (const PlateauProfileFitter* f = plateau_for(nrm))
-                if (const auto w = plateau_wall_offset(smoothed, x[i], nrm, model, *f)) t = *w;
-            } else if (t) {
-              const double limited = first_transition_limit(smoothed, x[i], nrm, model, search, 0.2 * h, *t, background_side);
-              // Capped at a thin gap to a neighbour on the other side of the band (bone beside a
-              // vessel, seen a voxel beyond the steepest rise): the neighbour's blur shifts both
-              // the band's exit and a dark valley's half-way level, so read the gap from a
-              // plateau fit up to the neighbour's rim.
-              std::optional<double> w;
-              if (limited < *t && !thin_gap.empty() &&
-                  (smoothed.sample(x[i] + nrm * (*t + h)) - model.reference) * background_side < -model.tolerance)
-                w = thin_gap[blur_level(nrm)].wall_offset(smoothed, x[i], nrm, model, background_side, *t);
-              t = w && *w <= *t ? *w : limited;
-            }
-            if (reuse) {
-              WallSearch& w = wall_search[i];
-              w.valid = true;
-              w.reused = 0;
-              w.position = x[i];
-              w.normal = nrm;
-              w.found = t.has_value();
-              if (t) w.wall = x[i] + nrm * *t;
+            if (searched[i] != 2) {
+              searched[i] = 1;
+              t = edge_offset_along_normal(smoothed, x[i], nrm, model, search, 0.2 * h, min_rise, h,
+                                           opt.valley_background ? background_departure : 0.0);
+              if (t && model.accept_brighter) {
+                // Bone: the outer fall of a thin cortex that the blur has lowered is read by the
+                // three-plateau fit (marrow, cortex, surroundings), not at the half-way level.
+                if (const PlateauProfileFitter* f = plateau_for(nrm))
+                  if (const auto w = plateau_wall_offset(smoothed, x[i], nrm, model, *f)) t = *w;
+              } else if (t) {
+                const double limited = first_transition_limit(smoothed, x[i], nrm, model, search, 0.2 * h, *t, background_side);
+                // Capped at a thin gap to a neighbour on the other side of the band (bone beside a
+                // vessel, seen a voxel beyond the steepest rise): the neighbour's blur shifts both
+                // the band's exit and a dark valley's half-way level, so read the gap from a
+                // plateau fit up to the neighbour's rim.
+                std::optional<double> w;
+                if (limited < *t && !thin_gap.empty() &&
+                    (smoothed.sample(x[i] + nrm * (*t + h)) - model.reference) * background_side < -model.tolerance)
+                  w = thin_gap[blur_level(nrm)].wall_offset(smoothed, x[i], nrm, model, background_side, *t);
+                t = w && *w <= *t ? *w : limited;
+              }
+              if (reuse) {
+                WallSearch& w = wall_search[i];
+                w.valid = true;
+                w.reused = 0;
+                w.position = x[i];
+                w.normal = nrm;
+                w.found = t.has_value();
+                if (t) w.wall = x[i] + nrm * *t;
+              }
             }
             if (t) {
               // Blur (the scanner's and our pre-smoothing) moves the half-way level of a curved

@@ -119,7 +119,7 @@ double first_transition_limit(const image::Volume<float>& smoothed, const Vec3& 
 std::optional<double> edge_offset_along_normal(const image::Volume<float>& smoothed, const Vec3& p,
                                                const Vec3& normal, const IntensityModel& model,
                                                double search_mm, double step_mm, double min_rise_per_mm,
-                                               double window_mm) {
+                                               double window_mm, double background_departure) {
   // Rise over a window: (D(t + w/2) − D(t − w/2)) / w with D = |I − reference|. With a
   // window of about a voxel the rise of a trilinearly interpolated image is continuous and
   // peaked, so its maximum locates the wall to a fraction of a voxel (a one-sample
@@ -173,11 +173,24 @@ std::optional<double> edge_offset_along_normal(const image::Volume<float>& smoot
   thread_local std::vector<double> inward, outward;  // departure at tc − s·step, tc + s·step
   inward.resize(std::size_t(reach) + 1);
   outward.resize(std::size_t(reach) + 1);
+  int s_out = 0;  // where the outward departure peaks
   for (int s = 0; s <= reach; ++s) {
     inward[std::size_t(s)] = depart(tc - s * step_mm);
     outward[std::size_t(s)] = s == 0 ? inward[0] : depart(tc + s * step_mm);
     d_in = std::min(d_in, inward[std::size_t(s)]);
-    d_out = std::max(d_out, outward[std::size_t(s)]);
+    if (outward[std::size_t(s)] > d_out) {
+      d_out = outward[std::size_t(s)];
+      s_out = s;
+    }
+  }
+  if (background_departure > d_out && !model.accept_brighter) {
+    // A valley: beyond its peak the departure falls back by more than a tolerance (a
+    // brighter neighbour a few voxels out). Its floor, raised by the blur of both flanks,
+    // is not the surroundings' level, and half-way to it lies inside the wall: the
+    // surroundings' level seen elsewhere on the surface is used instead.
+    double after = d_out;
+    for (int s = s_out; s <= reach; ++s) after = std::min(after, outward[std::size_t(s)]);
+    if (d_out - after > model.tolerance) d_out = background_departure;
   }
   const double half = 0.5 * (d_in + d_out);
   double wall = tc;

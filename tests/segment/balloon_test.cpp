@@ -139,6 +139,32 @@ TEST(EdgeOffset, ThinGapToBrightNeighbourStopsAtTheVesselWall) {
   EXPECT_EQ(first_transition_limit(v, Vec3(9.6, 1.5, 1.5), Vec3::UnitX(), bone, 2.0, 0.2, 1.5, -1), 1.5);
 }
 
+TEST(EdgeOffset, ValleyToBrightNeighbourIsReadAgainstTheSurroundingsLevel) {
+  // Vessel (350) up to x = 10, 3.5 voxels of soft tissue (40), bone (1200) beyond, blurred by
+  // σ = 1 voxel: the valley's floor stays near 100, and within the reach the profile climbs
+  // back towards the bone, so half-way to the floor lies inside the wall. Half-way to the
+  // surroundings' level (departure 310, where the tissue is wide) reads it.
+  const auto v = blurred_layers({10.0, 13.5}, {350, 40, 1200}, 1.0);
+  const IntensityModel m{350, 85};
+  for (double x0 : {9.4, 9.6, 9.8}) {
+    const Vec3 p(x0, 1.5, 1.5);
+    const auto floor_read = edge_offset_along_normal(v, p, Vec3::UnitX(), m, 2.0, 0.2, 0.25 * 85, 1.0);
+    const auto bg_read = edge_offset_along_normal(v, p, Vec3::UnitX(), m, 2.0, 0.2, 0.25 * 85, 1.0, 310.0);
+    ASSERT_TRUE(floor_read && bg_read) << x0;
+    EXPECT_LT(x0 + *floor_read, 9.85) << "the floor's half-way level should lie inside, x0 = " << x0;
+    EXPECT_TRUE(test::near(x0 + *bg_read, 10.0, 0.1)) << x0 << " -> " << x0 + *bg_read << " (floor " << x0 + *floor_read << ")";
+  }
+  // A plain wall: unchanged, bit for bit.
+  const auto step = blurred_layers({10.0}, {350, 40}, 1.0);
+  for (double x0 : {9.4, 9.6, 9.8}) {
+    const Vec3 p(x0, 1.5, 1.5);
+    const auto a = edge_offset_along_normal(step, p, Vec3::UnitX(), m, 2.0, 0.2, 0.25 * 85, 1.0);
+    const auto b = edge_offset_along_normal(step, p, Vec3::UnitX(), m, 2.0, 0.2, 0.25 * 85, 1.0, 310.0);
+    ASSERT_TRUE(a && b);
+    EXPECT_EQ(*a, *b);
+  }
+}
+
 TEST(EdgeOffset, BrightDepositWithoutGapIsNotACap) {
   // A much brighter deposit directly against the vessel (no gap, no dip): the limit keeps the
   // wall found by the steepest rise.

@@ -53,6 +53,11 @@ struct BalloonOptions {
   /// is noise-limited; 10 passes spread it over about a Gaussian of σ ≈ 2 edge lengths on the
   /// surface (each pass adds ≈ 3/7 ℓ² of variance per axis). Measured: docs/segmentation.md.
   int edge_offset_smoothing = 10;
+  /// Where the profile beyond the wall is a valley (a brighter neighbour, bone or another
+  /// vessel, a few voxels out), read the wall half-way to the surroundings' level (their
+  /// median over the surface) rather than to the valley's floor, which the blur of both
+  /// flanks raises (see edge_offset_along_normal). false = the floor, as before.
+  bool valley_background = true;
   /// Angle (degrees) between two neighbours' normals at which a neighbour's offset counts 1/e
   /// in that averaging (weight exp(−(1 − n_a·n_b) / (1 − cos angle))), so the average does not
   /// reach across a sharp bend such as a 2-mm twig's tip. 0 = plain average. Measured:

@@ -62,11 +62,15 @@ struct BalloonForceWeights {
 /// neighbour. Returns nothing when the strongest rise is below @p min_rise_per_mm
 /// (intensity units per mm), i.e. when there is no wall within reach. The rise is measured
 /// over @p window_mm (about a voxel; 0 = step_mm), see the implementation note.
+/// @p background_departure (> 0) is the surroundings' departure from the reference seen
+/// elsewhere: where the profile beyond the wall is a valley whose floor departs less (it
+/// rises again by more than a tolerance: a brighter neighbour a few voxels out), the
+/// half-way level is taken towards that, not towards the blur-raised floor. 0 = the floor.
 [[nodiscard]] std::optional<double> edge_offset_along_normal(const image::Volume<float>& smoothed,
                                                              const Vec3& point_mm, const Vec3& normal,
                                                              const IntensityModel& model, double search_mm,
                                                              double step_mm, double min_rise_per_mm,
-                                                             double window_mm = 0.0);
+                                                             double window_mm = 0.0, double background_departure = 0.0);
 
 /// Direction in which the intensity profile along @p normal first leaves the accepted band,
 /// walking outward from the innermost accepted sample within ±@p search_mm (samples every
