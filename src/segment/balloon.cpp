@@ -273,8 +273,8 @@ struct Balloon::State {
             [&](std::size_t i) {
               double e = smoothed.sample(x[i]);
               for (double q = 0.2 * h; q <= 2.0 * search; q += 0.2 * h) {
-                const double v = smoothed.sample(x[i] + d.normals[i] * q);
-                e = background_side > 0 ? std::max(e, v) : std::min(e, v);
+                const double val = smoothed.sample(x[i] + d.normals[i] * q);
+                e = background_side > 0 ? std::max(e, val) : std::min(e, val);
               }
               level[i] = e;
             },
