@@ -229,19 +229,17 @@ image::Volume<float> signed_distance(const geometry::TriangleMesh& surface,
       if (parent[std::size_t(a)].compare_exchange_strong(expected, b, std::memory_order_relaxed)) return;
     }
   };
-  // Each safe step once, from its lower end (+1 along each axis).
+  // Each safe step once, from its lower end (the same safety test as `seen` above, so an
+  // unseen point never steps to a seen one).
   parallel_for(
       static_cast<std::size_t>(total),
       [&](std::size_t idx) {
         if (seen[idx]) return;
         const auto v = std::int64_t(idx);
-        const std::int64_t c[3] = {v % n[0], (v / n[0]) % n[1], v / (n[0] * n[1])};
-        const double bv = bound(idx);
-        for (int a = 0; a < 3; ++a) {
-          if (c[a] + 1 >= n[a]) continue;
-          const std::int64_t w = v + stride[a];
-          if (bv + bound(std::size_t(w)) > need[a]) unite(v, w);
-        }
+        for_safe_neighbours(v, [&](std::int64_t w) {
+          if (w > v) unite(v, w);
+          return false;
+        });
       },
       options.threaded, 4096);
   // Roots evaluate the winding number; every member takes its root's sign.

@@ -126,7 +126,7 @@ struct Balloon::State {
   std::int64_t frozen_pending = 0;
   bool background_decided = false;
   int background_side = 0;  // see first_transition_limit
-  double background_departure = 0;  // |surroundings − reference|, see edge_offset_along_normal
+  double background_departure = 0;  // |surroundings − reference|, 0 = not used (edge_offset_along_normal)
   // The thin-layer wall model of the edge stage: fitters for blur σ = plateau_sigma0 +
   // q · plateau_dsigma (mm), q = 0, 1, ...; the blur along a normal picks one (plateau_for).
   std::vector<PlateauProfileFitter> plateau;
@@ -266,7 +266,7 @@ struct Balloon::State {
       background_decided = true;
       // The surroundings' level: the median over the surface of the farthest-from-band value
       // on the background side within two searches out along the normal.
-      if (!model.accept_brighter) {
+      if (opt.valley_background && !model.accept_brighter) {
         std::vector<double> level(n, 0.0);
         parallel_for(
             n,
@@ -316,8 +316,7 @@ struct Balloon::State {
             }
             if (searched[i] != 2) {
               searched[i] = 1;
-              t = edge_offset_along_normal(smoothed, x[i], nrm, model, search, 0.2 * h, min_rise, h,
-                                           opt.valley_background ? background_departure : 0.0);
+              t = edge_offset_along_normal(smoothed, x[i], nrm, model, search, 0.2 * h, min_rise, h, background_departure);
               if (t && model.accept_brighter) {
                 // Bone: the outer fall of a thin cortex that the blur has lowered is read by the
                 // three-plateau fit (marrow, cortex, surroundings), not at the half-way level.
