@@ -41,6 +41,7 @@ struct SegmentCliOptions {
   std::string mask;
   std::string report;
   bool bone = false;
+  bool white_noise = false;
   std::optional<double> calcium;
   double calcium_reach_mm = 4.0;
   int max_iterations = 4000;
@@ -195,6 +196,7 @@ void run(const SegmentCliOptions& o, const GlobalOptions& g) {
   bo.reference = o.reference;
   bo.tolerance = o.tolerance;
   bo.accept_brighter = o.bone;
+  if (o.white_noise) bo.estimate.residual_ball_factor = 5.0;
   bo.max_iterations = o.max_iterations;
   if (!o.roi.empty()) bo.roi_mm = parse_roi(o.roi);
   auto progress = make_progress(g.quiet);
@@ -319,6 +321,9 @@ void setup(CLI::App& app, const GlobalOptions& g) {
   sub->add_option("--tolerance", opts->tolerance, "accepted departure from the reference (same units)");
   sub->add_option("--roi", opts->roi, "region of interest x0,y0,z0,x1,y1,z1 (world mm), a safeguard");
   sub->add_flag("--bone", opts->bone, "anything brighter than the reference also belongs (bone)");
+  sub->add_flag("--white-noise", opts->white_noise,
+                "estimate the tolerance from the residual noise of a ball 5x the seed's (for uncorrelated noise, "
+                "e.g. synthetic phantoms; a real scan's correlated noise makes it too narrow)");
   sub->add_option("--calcium", opts->calcium,
                   "add calcified plaque: voxels brighter than this (e.g. HU, above the lumen's band) touching the "
                   "lumen, for references that count the vessel wall's calcium");

@@ -13,21 +13,6 @@
 namespace ido::image {
 namespace {
 
-/// Sampled Gaussian of @p sigma_vox voxels, half-width ceil(truncate · sigma), sum 1.
-std::vector<float> gaussian_kernel(double sigma_vox, double truncate) {
-  const int half = std::max(1, static_cast<int>(std::ceil(truncate * sigma_vox)));
-  std::vector<double> w(static_cast<std::size_t>(2 * half + 1));
-  double sum = 0.0;
-  for (int m = -half; m <= half; ++m) {
-    const double v = std::exp(-0.5 * (m * m) / (sigma_vox * sigma_vox));
-    w[static_cast<std::size_t>(m + half)] = v;
-    sum += v;
-  }
-  std::vector<float> out(w.size());
-  for (std::size_t n = 0; n < w.size(); ++n) out[n] = static_cast<float>(w[n] / sum);
-  return out;
-}
-
 /// One 1D convolution along @p axis with border replication.
 Volume<float> convolve_axis(const Volume<float>& in, int axis, const std::vector<float>& kernel,
                             bool threaded) {
@@ -120,6 +105,20 @@ Volume<Out> gradient_impl(const Volume<float>& v, bool threaded, Out fill, Store
 }
 
 }  // namespace
+
+std::vector<float> gaussian_kernel(double sigma_vox, double truncate) {
+  const int half = std::max(1, static_cast<int>(std::ceil(truncate * sigma_vox)));
+  std::vector<double> w(static_cast<std::size_t>(2 * half + 1));
+  double sum = 0.0;
+  for (int m = -half; m <= half; ++m) {
+    const double v = std::exp(-0.5 * (m * m) / (sigma_vox * sigma_vox));
+    w[static_cast<std::size_t>(m + half)] = v;
+    sum += v;
+  }
+  std::vector<float> out(w.size());
+  for (std::size_t n = 0; n < w.size(); ++n) out[n] = static_cast<float>(w[n] / sum);
+  return out;
+}
 
 Volume<float> gaussian_smooth(const Volume<float>& volume, const Vec3& sigma_mm_per_axis,
                               const GaussianOptions& options) {

@@ -467,7 +467,8 @@ Balloon::Balloon(const image::Volume<float>& ct, const std::vector<Vec3>& seeds_
     if (options.roi_mm && !m->inside_roi(s)) throw InvalidInput("balloon: a seed lies outside the region of interest");
   }
   IntensityModel est;
-  if (!options.reference || !options.tolerance) est = estimate_intensity_model(ct, seeds_mm, options.estimate);
+  if (!options.reference || !options.tolerance) est = estimate_intensity_model(ct, seeds_mm, options.estimate, m->smoothed,
+                                                                    options.smoothing_sigma_voxels * m->h);
   m->model.reference = options.reference ? *options.reference : est.reference;
   m->model.tolerance = options.tolerance ? *options.tolerance : est.tolerance;
   m->model.accept_brighter = options.accept_brighter;

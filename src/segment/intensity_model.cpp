@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "ido/segment/intensity_model.h"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -8,6 +9,41 @@
 #include "ido/image/filters.h"
 
 namespace ido::segment {
+namespace {
+
+/// Calls @p f(i, j, k) for every voxel of @p ct whose centre lies within @p radius mm of
+/// @p s (world mm).
+template <class F>
+void for_voxels_in_ball(const image::Volume<float>& ct, const Vec3& s, double radius, F&& f) {
+  const Vec3 idx = ct.world_to_index(s);
+  const double rmax = (Vec3::Constant(radius).array() / ct.spacing().array()).maxCoeff();
+  for (std::int64_t k = std::int64_t(std::floor(idx[2] - rmax)); k <= std::int64_t(std::ceil(idx[2] + rmax)); ++k)
+    for (std::int64_t j = std::int64_t(std::floor(idx[1] - rmax)); j <= std::int64_t(std::ceil(idx[1] + rmax)); ++j)
+      for (std::int64_t i = std::int64_t(std::floor(idx[0] - rmax)); i <= std::int64_t(std::ceil(idx[0] + rmax)); ++i) {
+        if (!ct.contains(i, j, k)) continue;
+        if ((ct.index_to_world(Vec3(double(i), double(j), double(k))) - s).norm() > radius) continue;
+        f(i, j, k);
+      }
+}
+
+/// Standard deviation of z − G ∗ z for unit white noise z and the separable sampled kernel G
+/// gaussian_smooth applies: Var = 1 − 2 g₀ + Σ g², with g₀ = Π_a g_a[centre] and
+/// Σ g² = Π_a Σ g_a².
+double residual_sigma_per_unit_noise(const Vec3& spacing, double sigma_mm) {
+  double centre = 1.0, sum_sq = 1.0;
+  for (int a = 0; a < 3; ++a) {
+    const double sigma_vox = sigma_mm / spacing[a];
+    if (sigma_vox < 1e-3) continue;  // gaussian_smooth skips the axis
+    const std::vector<float> g = image::gaussian_kernel(sigma_vox, image::GaussianOptions{}.truncate_sigmas);
+    double sq = 0.0;
+    for (float w : g) sq += double(w) * double(w);
+    centre *= g[g.size() / 2];
+    sum_sq *= sq;
+  }
+  return std::sqrt(std::max(0.0, 1.0 - 2.0 * centre + sum_sq));
+}
+
+}  // namespace
 
 IntensityModel estimate_intensity_model(const image::Volume<float>& ct, const std::vector<Vec3>& seeds_mm,
                                         const IntensityEstimateOptions& options) {
@@ -23,15 +59,7 @@ IntensityModel estimate_intensity_model(const image::Volume<float>& ct, const st
                            std::to_string(s[2]) + ") mm lies outside the volume");
     // Gather the ball's voxels (the foundation's robust_stats_in_ball works per seed; the
     // seeds are pooled here).
-    const Vec3 r_idx = (Vec3::Constant(radius).array() / ct.spacing().array()).matrix();
-    const double rmax = r_idx.maxCoeff();
-    for (std::int64_t k = std::int64_t(std::floor(idx[2] - rmax)); k <= std::int64_t(std::ceil(idx[2] + rmax)); ++k)
-      for (std::int64_t j = std::int64_t(std::floor(idx[1] - rmax)); j <= std::int64_t(std::ceil(idx[1] + rmax)); ++j)
-        for (std::int64_t i = std::int64_t(std::floor(idx[0] - rmax)); i <= std::int64_t(std::ceil(idx[0] + rmax)); ++i) {
-          if (!ct.contains(i, j, k)) continue;
-          if ((ct.index_to_world(Vec3(double(i), double(j), double(k))) - s).norm() > radius) continue;
-          values.push_back(ct(i, j, k));
-        }
+    for_voxels_in_ball(ct, s, radius, [&](std::int64_t i, std::int64_t j, std::int64_t k) { values.push_back(ct(i, j, k)); });
     if (values.empty()) values.push_back(ct.sample(s));
   }
   const image::RobustStats stats = image::robust_stats(values);
@@ -39,6 +67,36 @@ IntensityModel estimate_intensity_model(const image::Volume<float>& ct, const st
   m.reference = stats.median;
   m.tolerance = std::max({options.tolerance_sigmas * stats.sigma(),
                           options.min_tolerance_fraction * std::abs(stats.median), 1e-6});
+  return m;
+}
+
+IntensityModel estimate_intensity_model(const image::Volume<float>& ct, const std::vector<Vec3>& seeds_mm,
+                                        const IntensityEstimateOptions& options, const image::Volume<float>& smoothed,
+                                        double smoothing_sigma_mm) {
+  IntensityModel m = estimate_intensity_model(ct, seeds_mm, options);
+  if (!(options.residual_ball_factor > 0) || !(smoothing_sigma_mm > 0)) return m;
+  if (!smoothed.same_grid(ct)) throw InvalidInput("intensity model: the smoothed image is not on the CT's grid");
+  const double unit = residual_sigma_per_unit_noise(ct.spacing(), smoothing_sigma_mm);
+  if (!(unit > 1e-3)) return m;
+  // The first band's half: the interior of a vessel lies well inside it even where the
+  // first tolerance came out low, and the blurred rim of the wall falls outside.
+  const double keep = 0.5 * m.tolerance;
+  const auto organ_like = [&](std::int64_t i, std::int64_t j, std::int64_t k) {
+    return smoothed.contains(i, j, k) && std::abs(double(smoothed(i, j, k)) - m.reference) <= keep;
+  };
+  const double radius =
+      options.residual_ball_factor * (options.radius_mm > 0 ? options.radius_mm : 2.0 * ct.spacing().maxCoeff());
+  std::vector<double> residuals;
+  for (const Vec3& s : seeds_mm)
+    for_voxels_in_ball(ct, s, radius, [&](std::int64_t i, std::int64_t j, std::int64_t k) {
+      if (!organ_like(i, j, k) || !organ_like(i - 1, j, k) || !organ_like(i + 1, j, k) || !organ_like(i, j - 1, k) ||
+          !organ_like(i, j + 1, k) || !organ_like(i, j, k - 1) || !organ_like(i, j, k + 1))
+        return;
+      residuals.push_back(double(ct(i, j, k)) - double(smoothed(i, j, k)));
+    });
+  if (residuals.size() < options.residual_min_voxels) return m;
+  const double sigma = image::robust_stats(std::move(residuals)).sigma() / unit;
+  m.tolerance = std::max({options.tolerance_sigmas * sigma, options.min_tolerance_fraction * std::abs(m.reference), 1e-6});
   return m;
 }
 

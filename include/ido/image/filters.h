@@ -18,6 +18,11 @@ struct GaussianOptions {
   bool threaded = true;          ///< run the separable passes with oneTBB
 };
 
+/// The 1D kernel gaussian_smooth uses along an axis: the Gaussian of @p sigma_vox voxels
+/// sampled at the integers −half … half, half = max(1, ⌈truncate_sigmas · sigma_vox⌉),
+/// normalised to sum 1 (index half is the centre).
+[[nodiscard]] std::vector<float> gaussian_kernel(double sigma_vox, double truncate_sigmas);
+
 /// Smooths @p volume with an isotropic Gaussian of standard deviation @p sigma_mm
 /// (millimetres, world units), as three separable 1D convolutions along i, j, k whose
 /// per-axis sigma in voxels is sigma_mm / spacing. Each 1D kernel is the sampled Gaussian

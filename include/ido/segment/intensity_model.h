@@ -31,6 +31,20 @@ struct IntensityEstimateOptions {
   double tolerance_sigmas = 2.5;    ///< tolerance = this × robust σ (1.4826 · MAD)
   double min_tolerance_fraction = 0.05;  ///< lower bound: this × |reference|, so a flat
                                          ///< (noise-free) region still gets a usable band
+  /// Second pass of the noise estimate (used when the caller passes the smoothed image,
+  /// as the balloon does): within a ball this many times the first radius, the voxels whose
+  /// smoothed value lies within half the first band of the reference and whose six
+  /// neighbours do too (the organ's interior, away from the partial-volume rim) give the
+  /// noise σ from the MAD of their residual raw − smoothed, scaled to white noise by the
+  /// smoothing kernel. About 20 × the first ball's voxels, and the residual leaves out the
+  /// organ's slow grey-level variations, so the tolerance spreads far less over noise
+  /// draws than the first ball's MAD. The scaling assumes uncorrelated noise: in a real
+  /// scan, whose noise is correlated over neighbouring voxels, the residual is smaller and
+  /// the band too narrow (vmtk-aorta: 272 → 106, Dice within its section 0.95 → 0.75), so it
+  /// is off by default; `ido segment --white-noise` turns it on (5). Measured:
+  /// bench/results/segment-seeds.md. 0 = first pass only.
+  double residual_ball_factor = 0.0;
+  std::size_t residual_min_voxels = 64;  ///< fewer interior voxels: keep the first pass
 };
 
 /// Estimates the reference as the median of the voxels within radius_mm of the seeds (all
@@ -41,6 +55,16 @@ struct IntensityEstimateOptions {
 [[nodiscard]] IntensityModel estimate_intensity_model(const image::Volume<float>& ct,
                                                       const std::vector<Vec3>& seeds_mm,
                                                       const IntensityEstimateOptions& options = {});
+
+/// As above, then the residual second pass of IntensityEstimateOptions::residual_ball_factor
+/// on @p smoothed, which must be @p ct smoothed by an isotropic Gaussian of
+/// @p smoothing_sigma_mm (gaussian_smooth's default truncation) on the same grid.
+/// @throws ido::InvalidInput also when @p smoothed is not on @p ct's grid.
+[[nodiscard]] IntensityModel estimate_intensity_model(const image::Volume<float>& ct,
+                                                      const std::vector<Vec3>& seeds_mm,
+                                                      const IntensityEstimateOptions& options,
+                                                      const image::Volume<float>& smoothed,
+                                                      double smoothing_sigma_mm);
 
 /// The balloon's inflation speed for a vertex seeing @p intensity: 1 − departure /
 /// tolerance (see intensity_departure), clamped to [−1, 1]. Positive (inflate) inside the band, largest at the
