@@ -113,6 +113,27 @@ TEST(SurfaceRemesher, CollapseRemovesShortEdgesKeepsTopology) {
   EXPECT_TRUE(test::rel_near(f.volume, 4.0 / 3.0 * kPi * 1000.0, 0.05));
 }
 
+// The link condition is what keeps the genus: on a torus whose tube is a triangle (every
+// vertex already next to the whole cross-section) collapsing everything short must stop before
+// a tube pinches or the hole closes, leaving a closed manifold torus with no vertex below
+// valence 3.
+TEST(SurfaceRemesher, CollapseStopsAtTheLinkConditionOnAThinTorus) {
+  const auto m = torus(10.0, 1.0, 40, 3);
+  SurfaceRemesher r(m);
+  const auto n = r.collapse_short_edges(100.0, 1000.0);
+  EXPECT_GT(n, 0);
+  const auto out = r.mesh();
+  const Facts f = facts(out);
+  EXPECT_TRUE(f.closed_oriented);
+  EXPECT_TRUE(f.vertex_manifold);
+  EXPECT_EQ(f.euler, 0);
+  EXPECT_GE(out.vertices.size(), 7u);  // the smallest triangulated torus
+  std::vector<int> valence(out.vertices.size(), 0);
+  for (const Tri& t : out.triangles)
+    for (int v : t) ++valence[std::size_t(v)];
+  EXPECT_GE(*std::min_element(valence.begin(), valence.end()), 3);
+}
+
 TEST(SurfaceRemesher, FullRemeshOfTorusKeepsGenusAndVolume) {
   const double R = 10, rr = 3;
   const auto m = torus(R, rr, 24, 10);
