@@ -163,8 +163,13 @@ SurfaceRemesher::SurfaceRemesher(const geometry::TriangleMesh& mesh, std::vector
       throw InvalidInput("remesh: triangle " + std::to_string(t) + " repeats a vertex");
   }
   // A closed, consistently oriented manifold edge runs once each way: around every vertex a,
-  // each a→b of its triangles occurs once, and so does b→a.
+  // each a→b of its triangles occurs once, and so does b→a. That is: the outgoing ends are
+  // distinct and the incoming ends are the same set. Tested in one pass over each list with
+  // per-vertex stamps (`out_mark` on an outgoing end, `in_mark` once an incoming end has
+  // matched it); the message is then built by the pairwise test below, which names the first
+  // failing outgoing end.
   std::vector<std::int32_t> outgoing, incoming;
+  std::vector<std::uint64_t> mark(m_vertices.size(), 0);
   for (std::int32_t a = 0; a < static_cast<std::int32_t>(nv); ++a) {
     outgoing.clear();
     incoming.clear();
@@ -174,10 +179,23 @@ SurfaceRemesher::SurfaceRemesher(const geometry::TriangleMesh& mesh, std::vector
       outgoing.push_back(tr[(k + 1) % 3]);
       incoming.push_back(tr[(k + 2) % 3]);
     }
+    const std::uint64_t out_mark = 2 * std::uint64_t(a) + 1, in_mark = out_mark + 1;
+    bool ok = true;
+    for (std::int32_t b : outgoing) {
+      if (mark[std::size_t(b)] == out_mark) ok = false;
+      mark[std::size_t(b)] = out_mark;
+    }
+    for (std::int32_t c : incoming) {
+      if (mark[std::size_t(c)] != out_mark) ok = false;
+      mark[std::size_t(c)] = in_mark;
+    }
+    if (ok) continue;
     for (std::int32_t b : outgoing)
       if (std::count(outgoing.begin(), outgoing.end(), b) != 1 || std::count(incoming.begin(), incoming.end(), b) != 1)
         throw InvalidInput("remesh: the mesh is not a closed, consistently oriented 2-manifold (edge " +
                            std::to_string(std::min(a, b)) + "-" + std::to_string(std::max(a, b)) + ")");
+    throw InvalidInput("remesh: the mesh is not a closed, consistently oriented 2-manifold (at vertex " +
+                       std::to_string(a) + ")");
   }
 }
 

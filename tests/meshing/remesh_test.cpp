@@ -204,6 +204,23 @@ TEST(SurfaceRemesher, RejectsOpenMesh) {
   EXPECT_THROW((SurfaceRemesher{sphere(1.0, 0), std::vector<std::uint8_t>(2, 0)}), InvalidInput);
 }
 
+// Two closed, outward tetrahedra sharing the edge 0-1 (four triangles on it): every edge runs
+// once each way per tetrahedron, so only a count per vertex tells it is not a 2-manifold.
+TEST(SurfaceRemesher, RejectsTwoClosedPiecesSharingAnEdge) {
+  geometry::TriangleMesh m;
+  m.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0, -1, 0}, {0, 0, -1}};
+  auto tetrahedron = [&](std::int32_t a, std::int32_t b, std::int32_t c, std::int32_t d) {
+    m.triangles.push_back({a, c, b});
+    m.triangles.push_back({a, b, d});
+    m.triangles.push_back({a, d, c});
+    m.triangles.push_back({b, c, d});
+  };
+  tetrahedron(0, 1, 2, 3);
+  tetrahedron(0, 1, 4, 5);
+  EXPECT_FALSE(facts(m).closed_oriented);  // the fixture: 0→1 runs twice
+  EXPECT_THROW(SurfaceRemesher{m}, InvalidInput);
+}
+
 // The manifold check's message names the defect met first in vertex order (the lowest vertex
 // of the two turned-over triangles), so a caller can find it.
 TEST(SurfaceRemesher, NonManifoldMessageNamesTheLowestVertex) {
