@@ -6,7 +6,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <queue>
+#include <functional>
+#include <utility>
 #include <string>
 
 #include "ido/core/error.h"
@@ -21,6 +22,46 @@ std::uint64_t edge_key(std::int32_t a, std::int32_t b) {
 }
 
 Vec3 tri_normal(const Vec3& a, const Vec3& b, const Vec3& c) { return (b - a).cross(c - a); }
+
+// The edge queues of split and collapse: a batch known up front (every edge past the bound)
+// and a trickle pushed later (the edges an operation created). The batch is sorted once and
+// read in order, only the trickle goes through a binary heap: a heap over the whole batch
+// spent most of the collapse pass sifting tens of thousands of entries through cache misses.
+// Items come out in the order of Before exactly as from one std::priority_queue holding
+// everything (equal items cannot be told apart, so which copy comes first does not matter).
+template <class Item, class Before>
+class EdgeQueue {
+ public:
+  explicit EdgeQueue(std::vector<Item> batch) : m_batch(std::move(batch)) {
+    std::sort(m_batch.begin(), m_batch.end(), Before{});
+  }
+  [[nodiscard]] bool empty() const { return m_next == m_batch.size() && m_heap.empty(); }
+  void push(const Item& item) {
+    m_heap.push_back(item);
+    std::push_heap(m_heap.begin(), m_heap.end(), After{});
+  }
+  /// Removes and returns the first item. Precondition: !empty().
+  Item pop() {
+    if (!m_heap.empty() && (m_next == m_batch.size() || Before{}(m_heap.front(), m_batch[m_next]))) {
+      std::pop_heap(m_heap.begin(), m_heap.end(), After{});
+      const Item item = m_heap.back();
+      m_heap.pop_back();
+      return item;
+    }
+    return m_batch[m_next++];
+  }
+
+ private:
+  // The heap keeps its first item (by Before) at the front.
+  struct After {
+    bool operator()(const Item& x, const Item& y) const { return Before{}(y, x); }
+  };
+  std::vector<Item> m_batch;
+  std::size_t m_next = 0;
+  std::vector<Item> m_heap;
+};
+
+using EdgeItem = std::pair<double, std::uint64_t>;  // squared length (mm²), edge_key
 
 }  // namespace
 
@@ -122,8 +163,13 @@ SurfaceRemesher::SurfaceRemesher(const geometry::TriangleMesh& mesh, std::vector
       throw InvalidInput("remesh: triangle " + std::to_string(t) + " repeats a vertex");
   }
   // A closed, consistently oriented manifold edge runs once each way: around every vertex a,
-  // each a→b of its triangles occurs once, and so does b→a.
+  // each a→b of its triangles occurs once, and so does b→a. That is: the outgoing ends are
+  // distinct and the incoming ends are the same set. Tested in one pass over each list with
+  // per-vertex stamps (`out_mark` on an outgoing end, `in_mark` once an incoming end has
+  // matched it); the message is then built by the pairwise test below, which names the first
+  // failing outgoing end.
   std::vector<std::int32_t> outgoing, incoming;
+  std::vector<std::uint64_t> mark(m_vertices.size(), 0);
   for (std::int32_t a = 0; a < static_cast<std::int32_t>(nv); ++a) {
     outgoing.clear();
     incoming.clear();
@@ -133,32 +179,46 @@ SurfaceRemesher::SurfaceRemesher(const geometry::TriangleMesh& mesh, std::vector
       outgoing.push_back(tr[(k + 1) % 3]);
       incoming.push_back(tr[(k + 2) % 3]);
     }
+    const std::uint64_t out_mark = 2 * std::uint64_t(a) + 1, in_mark = out_mark + 1;
+    bool ok = true;
+    for (std::int32_t b : outgoing) {
+      if (mark[std::size_t(b)] == out_mark) ok = false;
+      mark[std::size_t(b)] = out_mark;
+    }
+    for (std::int32_t c : incoming) {
+      if (mark[std::size_t(c)] != out_mark) ok = false;
+      mark[std::size_t(c)] = in_mark;
+    }
+    if (ok) continue;
     for (std::int32_t b : outgoing)
       if (std::count(outgoing.begin(), outgoing.end(), b) != 1 || std::count(incoming.begin(), incoming.end(), b) != 1)
         throw InvalidInput("remesh: the mesh is not a closed, consistently oriented 2-manifold (edge " +
                            std::to_string(std::min(a, b)) + "-" + std::to_string(std::max(a, b)) + ")");
+    throw InvalidInput("remesh: the mesh is not a closed, consistently oriented 2-manifold (at vertex " +
+                       std::to_string(a) + ")");
   }
 }
 
 std::int64_t SurfaceRemesher::split_long_edges(double max_length_mm) {
-  using Item = std::pair<double, std::uint64_t>;
-  std::priority_queue<Item> queue;  // longest first
   const double max2 = max_length_mm * max_length_mm;
-  auto push_edges_of = [&](std::int32_t t) {
+  // Each edge of triangle t with a < b (once per triangle pair: the twin has a > b) that is
+  // longer than the bound.
+  auto edges_of = [&](std::int32_t t, auto&& take) {
     const Tri& tr = m_triangles[t];
     for (int k = 0; k < 3; ++k) {
       const std::int32_t a = tr[k], b = tr[(k + 1) % 3];
-      if (a > b) continue;  // each edge once per triangle pair suffices (the twin has a>b)
+      if (a > b) continue;
       const double l2 = (m_vertices[a] - m_vertices[b]).squaredNorm();
-      if (l2 > max2) queue.emplace(l2, edge_key(a, b));
+      if (l2 > max2) take(EdgeItem{l2, edge_key(a, b)});
     }
   };
+  std::vector<EdgeItem> batch;
   for (std::size_t t = 0; t < m_triangles.size(); ++t)
-    if (m_triangle_alive[t]) push_edges_of(static_cast<std::int32_t>(t));
+    if (m_triangle_alive[t]) edges_of(static_cast<std::int32_t>(t), [&](const EdgeItem& e) { batch.push_back(e); });
+  EdgeQueue<EdgeItem, std::greater<>> queue(std::move(batch));  // longest first
   std::int64_t count = 0;
   while (!queue.empty()) {
-    const auto [l2, key] = queue.top();
-    queue.pop();
+    const auto [l2, key] = queue.pop();
     const auto a = static_cast<std::int32_t>(key >> 32);
     const auto b = static_cast<std::int32_t>(key & 0xffffffffu);
     if (!m_vertex_alive[a] || !m_vertex_alive[b]) continue;
@@ -177,11 +237,11 @@ std::int64_t SurfaceRemesher::split_long_edges(double max_length_mm) {
     const std::int32_t n1 = Impl::add_triangle(*this, Tri{m, b, c});
     Impl::replace_in_triangle(*this, t2, a, m);
     const std::int32_t n2 = Impl::add_triangle(*this, Tri{m, a, d});
-    for (std::int32_t t : {t1, t2, n1, n2}) push_edges_of(t);
-    // push_edges_of only pushes a<b edges of each triangle: push m's edges explicitly too.
+    for (std::int32_t t : {t1, t2, n1, n2}) edges_of(t, [&](const EdgeItem& e) { queue.push(e); });
+    // edges_of only takes a<b edges of each triangle: push m's edges explicitly too.
     for (std::int32_t w : {a, b, c, d}) {
       const double e2 = (m_vertices[m] - m_vertices[w]).squaredNorm();
-      if (e2 > max2) queue.emplace(e2, edge_key(m, w));
+      if (e2 > max2) queue.push(EdgeItem{e2, edge_key(m, w)});
     }
     ++count;
   }
@@ -189,10 +249,9 @@ std::int64_t SurfaceRemesher::split_long_edges(double max_length_mm) {
 }
 
 std::int64_t SurfaceRemesher::collapse_short_edges(double min_length_mm, double max_length_mm) {
-  using Item = std::pair<double, std::uint64_t>;
-  std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;  // shortest first
   const double min2 = min_length_mm * min_length_mm;
   const double max2 = max_length_mm * max_length_mm;
+  std::vector<EdgeItem> batch;
   for (std::size_t t = 0; t < m_triangles.size(); ++t) {
     if (!m_triangle_alive[t]) continue;
     const Tri& tr = m_triangles[t];
@@ -200,14 +259,21 @@ std::int64_t SurfaceRemesher::collapse_short_edges(double min_length_mm, double 
       const std::int32_t a = tr[k], b = tr[(k + 1) % 3];
       if (a > b) continue;
       const double l2 = (m_vertices[a] - m_vertices[b]).squaredNorm();
-      if (l2 < min2) queue.emplace(l2, edge_key(a, b));
+      if (l2 < min2) batch.emplace_back(l2, edge_key(a, b));
     }
   }
+  EdgeQueue<EdgeItem, std::less<>> queue(std::move(batch));  // shortest first
   std::int64_t count = 0;
-  std::vector<std::int32_t> na, nb, common, nc;
+  // The tests below decide exactly as the textbook formulation (sorted neighbour lists, their
+  // intersection, the neighbour count of each common vertex) but without building those lists:
+  // on a closed edge-manifold mesh, which every operation here preserves, a vertex has as many
+  // distinct neighbours as incident triangles, and a neighbour met twice (once in each of the
+  // two triangles of the shared edge) is told apart by a per-vertex stamp.
+  std::vector<std::uint32_t> mark(m_vertices.size(), 0);
+  std::uint32_t stamp = 0;
+  std::vector<std::int32_t> moved;
   while (!queue.empty() && m_alive_vertices > 4) {
-    const auto [l2, key] = queue.top();
-    queue.pop();
+    const auto [l2, key] = queue.pop();
     std::int32_t a = static_cast<std::int32_t>(key >> 32);
     std::int32_t b = static_cast<std::int32_t>(key & 0xffffffffu);
     if (!m_vertex_alive[a] || !m_vertex_alive[b]) continue;
@@ -217,19 +283,32 @@ std::int64_t SurfaceRemesher::collapse_short_edges(double min_length_mm, double 
     std::int32_t ts[2];
     if (Impl::edge_triangles(*this, a, b, ts) != 2) continue;
     // Link condition: the endpoints' common neighbours are exactly the two opposite vertices.
-    Impl::neighbours(*this, a, na);
-    Impl::neighbours(*this, b, nb);
-    common.clear();
-    std::set_intersection(na.begin(), na.end(), nb.begin(), nb.end(), std::back_inserter(common));
-    if (common.size() != 2) continue;
+    // Neighbours of a get `in_a`; a neighbour of b holding it is common and is moved on to
+    // `counted`, so that its second occurrence around b is not counted again.
+    const std::uint32_t in_a = stamp + 1, counted = stamp + 2;
+    stamp += 2;
+    for (std::int32_t t : m_vertex_triangles[a])
+      for (std::int32_t w : m_triangles[t])
+        if (w != a) mark[w] = in_a;
+    std::int32_t common[2];
+    int n_common = 0;
+    for (std::int32_t t : m_vertex_triangles[b])
+      for (std::int32_t w : m_triangles[t])
+        if (w != b && mark[w] == in_a) {
+          mark[w] = counted;
+          if (n_common < 2) common[n_common] = w;
+          ++n_common;
+        }
+    if (n_common != 2) continue;
     // Keep b; a disappears. A locked end stays where it is.
-    if (m_locked[a]) std::swap(a, b), std::swap(na, nb);
+    if (m_locked[a]) std::swap(a, b);
     const Vec3 target = m_locked[b] ? m_vertices[b] : 0.5 * (m_vertices[a] + m_vertices[b]);
+    // No edge left longer than max: every neighbour of either end, other than the ends.
     bool ok = true;
-    for (std::int32_t w : na)
-      if (w != b && (m_vertices[w] - target).squaredNorm() > max2) ok = false;
-    for (std::int32_t w : nb)
-      if (w != a && (m_vertices[w] - target).squaredNorm() > max2) ok = false;
+    for (std::int32_t v : {a, b})
+      for (std::int32_t t : m_vertex_triangles[v])
+        for (std::int32_t w : m_triangles[t])
+          if (w != a && w != b && (m_vertices[w] - target).squaredNorm() > max2) ok = false;
     if (!ok) continue;
     // No surviving triangle may turn over or become needle-thin.
     for (std::int32_t v : {a, b}) {
@@ -251,38 +330,42 @@ std::int64_t SurfaceRemesher::collapse_short_edges(double min_length_mm, double 
       if (!ok) break;
     }
     if (!ok) continue;
-    // Valence guard: the two opposite vertices lose one neighbour each; keep them ≥ 3.
-    bool small_valence = false;
-    for (std::int32_t c : common) {
-      Impl::neighbours(*this, c, nc);
-      if (nc.size() <= 3) small_valence = true;
-    }
-    if (small_valence) continue;
+    // Valence guard: the two opposite vertices lose one neighbour each; keep them ≥ 3
+    // (neighbour count = incident triangle count, see above).
+    if (m_vertex_triangles[common[0]].size() <= 3 || m_vertex_triangles[common[1]].size() <= 3) continue;
     // Perform: delete the two triangles of the edge, move a's others onto b.
     for (std::int32_t t : {ts[0], ts[1]}) {
       m_triangle_alive[t] = 0;
       for (std::int32_t v : m_triangles[t]) Impl::remove_incidence(*this, v, t);
     }
-    const std::vector<std::int32_t> moved = m_vertex_triangles[a];
+    moved.assign(m_vertex_triangles[a].begin(), m_vertex_triangles[a].end());
     for (std::int32_t t : moved) Impl::replace_in_triangle(*this, t, a, b);
     m_vertices[b] = target;
     m_vertex_alive[a] = 0;
     m_vertex_triangles[a].clear();
     --m_alive_vertices;
     ++count;
-    Impl::neighbours(*this, b, nb);
-    for (std::int32_t w : nb) {
-      const double e2 = (m_vertices[w] - m_vertices[b]).squaredNorm();
-      if (e2 < min2) queue.emplace(e2, edge_key(w, b));
-    }
+    // b's edges that are now short, each once (the queue's order depends only on its
+    // contents, not on the order of insertion).
+    const std::uint32_t pushed = ++stamp;
+    for (std::int32_t t : m_vertex_triangles[b])
+      for (std::int32_t w : m_triangles[t]) {
+        if (w == b || mark[w] == pushed) continue;
+        mark[w] = pushed;
+        const double e2 = (m_vertices[w] - m_vertices[b]).squaredNorm();
+        if (e2 < min2) queue.push(EdgeItem{e2, edge_key(w, b)});
+      }
   }
   return count;
 }
 
 std::int64_t SurfaceRemesher::flip_edges() {
   std::int64_t count = 0;
-  std::vector<std::int32_t> nbuf;
-  auto valence = [&](std::int32_t v) { return static_cast<int>(m_vertex_triangles[v].size()); };
+  // Valences in one flat array (kept up to date by each flip): the scan below reads two per
+  // edge, and the incidence lists' sizes are scattered over the heap.
+  std::vector<std::int32_t> valences(m_vertices.size());
+  for (std::size_t v = 0; v < valences.size(); ++v) valences[v] = static_cast<std::int32_t>(m_vertex_triangles[v].size());
+  auto valence = [&](std::int32_t v) { return static_cast<int>(valences[std::size_t(v)]); };
   const std::size_t nt = m_triangles.size();
   for (std::size_t t0 = 0; t0 < nt; ++t0) {
     if (!m_triangle_alive[t0]) continue;
@@ -327,10 +410,13 @@ std::int64_t SurfaceRemesher::flip_edges() {
       // Flip in place: t1 (a,b,c) → (a,d,c); t2 (b,a,d) → (d,b,c).
       Impl::replace_in_triangle(*this, t1, b, d);  // (a,d,c)
       Impl::replace_in_triangle(*this, t2, a, c);  // (b,c,d) ≡ (d,b,c)
+      --valences[std::size_t(a)];
+      --valences[std::size_t(b)];
+      ++valences[std::size_t(c)];
+      ++valences[std::size_t(d)];
       ++count;
     }
   }
-  (void)nbuf;
   return count;
 }
 

@@ -113,6 +113,27 @@ TEST(SurfaceRemesher, CollapseRemovesShortEdgesKeepsTopology) {
   EXPECT_TRUE(test::rel_near(f.volume, 4.0 / 3.0 * kPi * 1000.0, 0.05));
 }
 
+// The link condition is what keeps the genus: on a torus whose tube is a triangle (every
+// vertex already next to the whole cross-section) collapsing everything short must stop before
+// a tube pinches or the hole closes, leaving a closed manifold torus with no vertex below
+// valence 3.
+TEST(SurfaceRemesher, CollapseStopsAtTheLinkConditionOnAThinTorus) {
+  const auto m = torus(10.0, 1.0, 40, 3);
+  SurfaceRemesher r(m);
+  const auto n = r.collapse_short_edges(100.0, 1000.0);
+  EXPECT_GT(n, 0);
+  const auto out = r.mesh();
+  const Facts f = facts(out);
+  EXPECT_TRUE(f.closed_oriented);
+  EXPECT_TRUE(f.vertex_manifold);
+  EXPECT_EQ(f.euler, 0);
+  EXPECT_GE(out.vertices.size(), 7u);  // the smallest triangulated torus
+  std::vector<int> valence(out.vertices.size(), 0);
+  for (const Tri& t : out.triangles)
+    for (int v : t) ++valence[std::size_t(v)];
+  EXPECT_GE(*std::min_element(valence.begin(), valence.end()), 3);
+}
+
 TEST(SurfaceRemesher, FullRemeshOfTorusKeepsGenusAndVolume) {
   const double R = 10, rr = 3;
   const auto m = torus(R, rr, 24, 10);
@@ -181,6 +202,23 @@ TEST(SurfaceRemesher, RejectsOpenMesh) {
   bad.triangles[0][0] = 99;
   EXPECT_THROW(SurfaceRemesher{bad}, InvalidInput);
   EXPECT_THROW((SurfaceRemesher{sphere(1.0, 0), std::vector<std::uint8_t>(2, 0)}), InvalidInput);
+}
+
+// Two closed, outward tetrahedra sharing the edge 0-1 (four triangles on it): every edge runs
+// once each way per tetrahedron, so only a count per vertex tells it is not a 2-manifold.
+TEST(SurfaceRemesher, RejectsTwoClosedPiecesSharingAnEdge) {
+  geometry::TriangleMesh m;
+  m.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0, -1, 0}, {0, 0, -1}};
+  auto tetrahedron = [&](std::int32_t a, std::int32_t b, std::int32_t c, std::int32_t d) {
+    m.triangles.push_back({a, c, b});
+    m.triangles.push_back({a, b, d});
+    m.triangles.push_back({a, d, c});
+    m.triangles.push_back({b, c, d});
+  };
+  tetrahedron(0, 1, 2, 3);
+  tetrahedron(0, 1, 4, 5);
+  EXPECT_FALSE(facts(m).closed_oriented);  // the fixture: 0→1 runs twice
+  EXPECT_THROW(SurfaceRemesher{m}, InvalidInput);
 }
 
 // The manifold check's message names the defect met first in vertex order (the lowest vertex
