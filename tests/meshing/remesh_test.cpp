@@ -83,6 +83,14 @@ Facts facts(const geometry::TriangleMesh& m) {
   return f;
 }
 
+// The topology every remesher operation must keep: a closed, consistently oriented,
+// vertex-manifold surface with the input's Euler characteristic.
+void expect_closed_manifold(const Facts& f, long euler) {
+  EXPECT_TRUE(f.closed_oriented);
+  EXPECT_TRUE(f.vertex_manifold);
+  EXPECT_EQ(f.euler, euler);
+}
+
 TEST(SurfaceRemesher, SplitBoundsEveryEdgeAndKeepsManifold) {
   const auto m = sphere(10.0, 1);  // edges ≈ 7 mm
   SurfaceRemesher r(m);
@@ -90,9 +98,7 @@ TEST(SurfaceRemesher, SplitBoundsEveryEdgeAndKeepsManifold) {
   EXPECT_GT(n, 100);
   const auto out = r.mesh();
   const Facts f = facts(out);
-  EXPECT_TRUE(f.closed_oriented);
-  EXPECT_TRUE(f.vertex_manifold);
-  EXPECT_EQ(f.euler, 2);
+  expect_closed_manifold(f, 2);
   EXPECT_LE(f.max_edge, 1.5);
   // Midpoint splits do not change the enclosed polyhedron.
   EXPECT_TRUE(test::rel_near(f.volume, facts(m).volume, 1e-9));
@@ -105,9 +111,7 @@ TEST(SurfaceRemesher, CollapseRemovesShortEdgesKeepsTopology) {
   EXPECT_GT(n, 1000);
   const auto out = r.mesh();
   const Facts f = facts(out);
-  EXPECT_TRUE(f.closed_oriented);
-  EXPECT_TRUE(f.vertex_manifold);
-  EXPECT_EQ(f.euler, 2);
+  expect_closed_manifold(f, 2);
   EXPECT_LE(f.max_edge, 2.0 + 1e-9);
   EXPECT_LT(out.vertices.size(), m.vertices.size() / 4);
   EXPECT_TRUE(test::rel_near(f.volume, 4.0 / 3.0 * kPi * 1000.0, 0.05));
@@ -124,9 +128,7 @@ TEST(SurfaceRemesher, CollapseStopsAtTheLinkConditionOnAThinTorus) {
   EXPECT_GT(n, 0);
   const auto out = r.mesh();
   const Facts f = facts(out);
-  EXPECT_TRUE(f.closed_oriented);
-  EXPECT_TRUE(f.vertex_manifold);
-  EXPECT_EQ(f.euler, 0);
+  expect_closed_manifold(f, 0);
   EXPECT_GE(out.vertices.size(), 7u);  // the smallest triangulated torus
   std::vector<int> valence(out.vertices.size(), 0);
   for (const Tri& t : out.triangles)
@@ -139,9 +141,7 @@ TEST(SurfaceRemesher, FullRemeshOfTorusKeepsGenusAndVolume) {
   const auto m = torus(R, rr, 24, 10);
   const auto out = remesh(m, {.target_edge_mm = 0.8, .iterations = 4});
   const Facts f = facts(out);
-  EXPECT_TRUE(f.closed_oriented);
-  EXPECT_TRUE(f.vertex_manifold);
-  EXPECT_EQ(f.euler, 0);
+  expect_closed_manifold(f, 0);
   EXPECT_GT(f.min_edge, 0.8 * 0.8 * 0.5);
   EXPECT_LT(f.max_edge, 0.8 * 4.0 / 3.0 + 1e-9);
   // Refined and relaxed: volume within 3 % of the coarse input polyhedron's.
@@ -165,9 +165,7 @@ TEST(SurfaceRemesher, FlipsEvenValences) {
   const auto out = r.mesh();
   EXPECT_LT(deviation(out), before);
   const Facts f = facts(out);
-  EXPECT_TRUE(f.closed_oriented);
-  EXPECT_TRUE(f.vertex_manifold);
-  EXPECT_EQ(f.euler, 2);
+  expect_closed_manifold(f, 2);
 }
 
 TEST(SurfaceRemesher, LockedVerticesStayPut) {
