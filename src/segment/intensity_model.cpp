@@ -43,13 +43,24 @@ double residual_sigma_per_unit_noise(const Vec3& spacing, double sigma_mm) {
   return std::sqrt(std::max(0.0, 1.0 - 2.0 * centre + sum_sq));
 }
 
+/// The seed ball's radius (mm): radius_mm, or 2 × the largest spacing when it is 0.
+double seed_ball_radius(const image::Volume<float>& ct, const IntensityEstimateOptions& options) {
+  return options.radius_mm > 0 ? options.radius_mm : 2.0 * ct.spacing().maxCoeff();
+}
+
+/// The band's half-width for a noise σ: tolerance_sigmas × σ, bounded below by
+/// min_tolerance_fraction × |reference| (and kept positive).
+double tolerance_from_sigma(double sigma, double reference, const IntensityEstimateOptions& options) {
+  return std::max({options.tolerance_sigmas * sigma, options.min_tolerance_fraction * std::abs(reference), 1e-6});
+}
+
 }  // namespace
 
 IntensityModel estimate_intensity_model(const image::Volume<float>& ct, const std::vector<Vec3>& seeds_mm,
                                         const IntensityEstimateOptions& options) {
   if (ct.empty()) throw InvalidInput("intensity model: the volume is empty");
   if (seeds_mm.empty()) throw InvalidInput("intensity model: at least one seed is needed");
-  const double radius = options.radius_mm > 0 ? options.radius_mm : 2.0 * ct.spacing().maxCoeff();
+  const double radius = seed_ball_radius(ct, options);
   std::vector<double> values;
   for (const Vec3& s : seeds_mm) {
     const Vec3 idx = ct.world_to_index(s);
@@ -65,8 +76,7 @@ IntensityModel estimate_intensity_model(const image::Volume<float>& ct, const st
   const image::RobustStats stats = image::robust_stats(values);
   IntensityModel m;
   m.reference = stats.median;
-  m.tolerance = std::max({options.tolerance_sigmas * stats.sigma(),
-                          options.min_tolerance_fraction * std::abs(stats.median), 1e-6});
+  m.tolerance = tolerance_from_sigma(stats.sigma(), stats.median, options);
   return m;
 }
 
@@ -84,8 +94,7 @@ IntensityModel estimate_intensity_model(const image::Volume<float>& ct, const st
   const auto organ_like = [&](std::int64_t i, std::int64_t j, std::int64_t k) {
     return smoothed.contains(i, j, k) && std::abs(double(smoothed(i, j, k)) - m.reference) <= keep;
   };
-  const double radius =
-      options.residual_ball_factor * (options.radius_mm > 0 ? options.radius_mm : 2.0 * ct.spacing().maxCoeff());
+  const double radius = options.residual_ball_factor * seed_ball_radius(ct, options);
   std::vector<double> residuals;
   for (const Vec3& s : seeds_mm)
     for_voxels_in_ball(ct, s, radius, [&](std::int64_t i, std::int64_t j, std::int64_t k) {
@@ -96,7 +105,7 @@ IntensityModel estimate_intensity_model(const image::Volume<float>& ct, const st
     });
   if (residuals.size() < options.residual_min_voxels) return m;
   const double sigma = image::robust_stats(std::move(residuals)).sigma() / unit;
-  m.tolerance = std::max({options.tolerance_sigmas * sigma, options.min_tolerance_fraction * std::abs(m.reference), 1e-6});
+  m.tolerance = tolerance_from_sigma(sigma, m.reference, options);
   return m;
 }
 
