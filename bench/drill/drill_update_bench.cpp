@@ -40,8 +40,11 @@ double process_cpu_s() {
 // samples, queue the erosion sub-steps, run erosion within the visit budget (0 = unlimited),
 // rebuild the changed v_list chunks. After the trace, updates continue (no new pose) until
 // the erosion and v_list backlogs are done; they are timed too. Args: depth, erosion visit
-// budget, chunk level, v_list visit budget (0 = unlimited).
-void BM_UpdateTime(benchmark::State& state) {
+// budget, chunk level, v_list visit budget (0 = unlimited); BM_UpdateTimeThreads takes the
+// v_list rebuild's worker threads as a fifth (BoundarySurfaceOptions::threads; 1 = serial).
+// Wall-clock percentiles (p50_ms, p99_ms) are the update's latency; the cpu_ ones are the
+// calling thread's CPU time, which leaves out what other workers did.
+void update_time(benchmark::State& state, int threads) {
   const int depth = static_cast<int>(state.range(0));
   const auto budget = static_cast<std::size_t>(state.range(1));
   const int chunk_level = static_cast<int>(state.range(2));
@@ -51,10 +54,11 @@ void BM_UpdateTime(benchmark::State& state) {
   std::vector<double> collide_cpu, erode_cpu, surface_cpu;  // the three parts of cpu_times
   double bytes = 0.0, nodes = 0.0, storage = 0.0, removed = 0.0, faces = 0.0, hash_bytes = 0.0;
   std::size_t backlog_updates = 0, max_queue = 0;
+  const double process_cpu0 = process_cpu_s();
   for (auto _ : state) {
     TetHierarchy h(make_block(kBlock, kBlockCell));
     const double before = h.material_volume();
-    BoundarySurface surface(h, {.chunk_level = chunk_level});
+    BoundarySurface surface(h, {.chunk_level = chunk_level, .threads = threads});
     const Tool tool({.burr_radius_mm = kRadius, .sample_count = 1000});
     Eroder eroder({.force_threshold_n = 0.0, .removal_rate_mm3_per_s = 0.0, .max_depth = depth, .max_node_visits = budget});
     times.clear();
@@ -119,7 +123,10 @@ void BM_UpdateTime(benchmark::State& state) {
   state.counters["v_list_kB"] = faces * static_cast<double>(sizeof(SurfaceFace)) / 1024.0;
   state.counters["nodes"] = nodes;
   state.counters["leaf_edge_mm"] = leaf_edge(depth);
+  state.counters["process_cpu_s"] = process_cpu_s() - process_cpu0;
 }
+void BM_UpdateTime(benchmark::State& state) { update_time(state, 0); }
+void BM_UpdateTimeThreads(benchmark::State& state) { update_time(state, static_cast<int>(state.range(4))); }
 // Unlimited erosion with whole-root v_lists (chunk level 0: the previous algorithm's work,
 // in the new code), unlimited erosion with chunked v_lists, the default budgets, half, one
 // and a half and about two thirds of them (4000 / 5500: what a p99 of 1 ms at depth 8 would
@@ -135,6 +142,12 @@ BENCHMARK(BM_UpdateTime)
     ->ArgsProduct({{5, 6, 7}, {3000}, {3}, {4000}})
     ->ArgsProduct({{6, 7, 8}, {9000}, {3}, {12000}})
     ->ArgsProduct({{4, 5, 6, 7, 8}, {4000}, {3}, {5500}})
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond);
+// The default budgets with the v_list chunks rebuilt by the calling thread alone (1) and by
+// two workers (2), side by side in one run.
+BENCHMARK(BM_UpdateTimeThreads)
+    ->ArgsProduct({{4, 5, 6, 7, 8}, {6000}, {3}, {8000}, {1, 2}})
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond);
 

@@ -3,10 +3,16 @@
 #include "ido/drill/boundary_surface.h"
 
 #include <algorithm>
+#include <atomic>
+#include <limits>
 #include <string>
 #include <tuple>
 #include <unordered_map>
 #include <unordered_set>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include "ido/core/error.h"
 
@@ -653,6 +659,9 @@ BoundarySurface::BoundarySurface(const TetHierarchy& hierarchy, const BoundarySu
   if (options.chunk_level < 0 || options.chunk_level > 4) {
     throw InvalidInput("boundary surface: chunk level must be between 0 and 4, got " + std::to_string(options.chunk_level));
   }
+  if (options.threads < 0) {
+    throw InvalidInput("boundary surface: threads must be 0 (all) or positive, got " + std::to_string(options.threads));
+  }
   m_full_chunks = 1U << (3 * options.chunk_level);
   rebuild_all(hierarchy);
 }
@@ -813,41 +822,129 @@ void BoundarySurface::update(const TetHierarchy& hierarchy, std::span<const Node
   rebuild_ranges(hierarchy, max_node_visits);
 }
 
+// The node visits of one update, shared by its workers: each adds a unit's visits when it has
+// walked it, and a worker takes no new piece, and stops inside one, once they reach max.
+struct BoundarySurface::Budget {
+  std::atomic<std::size_t> visits{0};
+  std::size_t max = 0;  // 0 = unlimited
+  [[nodiscard]] bool spent() const noexcept { return max > 0 && visits.load(std::memory_order_relaxed) >= max; }
+};
+
 void BoundarySurface::rebuild_ranges(const TetHierarchy& hierarchy, std::size_t max_node_visits) {
   m_rebuilt.clear();
   m_rebuilt_chunks.clear();
   m_visits = 0;
-  std::sort(m_dirty.begin(), m_dirty.end(),
-            [](const Range& a, const Range& b) { return a.root != b.root ? a.root < b.root : a.lo < b.lo; });
-  // Merge overlapping ranges of a root.
-  std::vector<Range> merged;
-  merged.reserve(m_dirty.size());
-  for (const Range& d : m_dirty) {
-    if (!merged.empty() && merged.back().root == d.root && d.lo <= merged.back().hi) {
-      merged.back().hi = std::max(merged.back().hi, d.hi);
-    } else {
-      merged.push_back(d);
+  // A root kept as one list that is now refined gets its chunk lists here, before any worker
+  // indexes them, and all of them are rebuilt.
+  const std::size_t marked = m_dirty.size();
+  for (std::size_t i = 0; i < marked; ++i) {
+    const std::uint32_t r = m_dirty[i].root;
+    auto& ch = m_chunks[r];
+    if (ch.size() == 1 && m_full_chunks > 1 && TetHierarchy::state_of_word(hierarchy.root_word(r)) == NodeState::Internal) {
+      ch.resize(m_full_chunks);
+      m_dirty.push_back({r, 0, m_full_chunks});
     }
   }
-  m_dirty.clear();
-  for (std::size_t i = 0; i < merged.size(); ++i) {
-    Range& d = merged[i];
-    if (max_node_visits > 0 && m_visits >= max_node_visits) {
-      m_dirty.assign(merged.begin() + static_cast<std::ptrdiff_t>(i), merged.end());  // the rest waits
-      break;
+  std::sort(m_dirty.begin(), m_dirty.end(),
+            [](const Range& a, const Range& b) { return a.root != b.root ? a.root < b.root : a.lo < b.lo; });
+  // Merge overlapping (and adjacent) ranges of a root, then cut them at the boundaries of
+  // the level-(chunk_level − 1) sub-trees ("blocks"). A unit of rebuild_range (the node at
+  // the chunk level on a chunk's path, or the shallower leaf covering it) lies within one
+  // block unless it is the root itself. The pieces of one block (of one root, for a root
+  // kept whole or no longer refined) form a group, which one worker rebuilds in order, so no
+  // two workers ever write the same unit's list. Workers take groups in order.
+  m_pieces.clear();
+  m_groups.clear();
+  const std::uint32_t block = m_full_chunks > 1 ? m_full_chunks / 8 : 1;
+  std::uint64_t last_key = std::numeric_limits<std::uint64_t>::max();
+  auto add = [&](const Range& d, std::uint32_t b) {
+    const std::uint64_t key = (static_cast<std::uint64_t>(d.root) << 32) | b;
+    if (key != last_key) m_groups.push_back(static_cast<std::uint32_t>(m_pieces.size()));
+    last_key = key;
+    m_pieces.push_back(d);
+  };
+  auto cut = [&](const Range& d) {
+    if (m_chunks[d.root].size() == 1 ||
+        TetHierarchy::state_of_word(hierarchy.root_word(d.root)) != NodeState::Internal) {
+      // One unit, the root: its ranges are rebuilt once, as one piece.
+      if (!m_pieces.empty() && last_key == ((static_cast<std::uint64_t>(d.root) << 32) | 0xFFFFFFFFU)) {
+        m_pieces.back().hi = std::max(m_pieces.back().hi, d.hi);
+      } else {
+        add(d, 0xFFFFFFFFU);
+      }
+      return;
     }
-    m_range_end = 0;
-    const std::uint32_t stop = rebuild_range(hierarchy, d.root, d.lo, d.hi, max_node_visits);
+    for (std::uint32_t lo = d.lo; lo < d.hi;) {
+      const std::uint32_t hi = std::min(d.hi, (lo / block + 1) * block);
+      add({d.root, lo, hi}, lo / block);
+      lo = hi;
+    }
+  };
+  Range run{};
+  bool open = false;
+  for (const Range& d : m_dirty) {
+    if (open && run.root == d.root && d.lo <= run.hi) {
+      run.hi = std::max(run.hi, d.hi);
+      continue;
+    }
+    if (open) cut(run);
+    run = d;
+    open = true;
+  }
+  if (open) cut(run);
+  m_groups.push_back(static_cast<std::uint32_t>(m_pieces.size()));
+  m_dirty.clear();
+
+  constexpr std::uint32_t kNotStarted = std::numeric_limits<std::uint32_t>::max();
+  m_stop.assign(m_pieces.size(), kNotStarted);
+  Budget budget;
+  budget.max = max_node_visits;
+  const std::size_t groups = m_groups.size() - 1;
+  std::atomic<std::size_t> next{0};
+  auto work = [&](std::vector<ChunkId>& rebuilt) {
+    for (;;) {
+      const std::size_t g = next.fetch_add(1, std::memory_order_relaxed);
+      if (g >= groups) return;
+      for (std::uint32_t i = m_groups[g]; i < m_groups[g + 1]; ++i) {
+        if (budget.spent()) return;
+        const Range& d = m_pieces[i];
+        m_stop[i] = rebuild_range(hierarchy, d.root, d.lo, d.hi, budget, rebuilt);
+      }
+    }
+  };
+  const int arena = tbb::this_task_arena::max_concurrency();
+  const std::size_t workers =
+      std::min<std::size_t>(groups, static_cast<std::size_t>(m_options.threads > 0 ? m_options.threads : arena));
+  if (workers <= 1) {
+    work(m_rebuilt_chunks);
+  } else {
+    if (m_worker_chunks.size() < workers) m_worker_chunks.resize(workers);
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, workers, 1),
+        [&](const tbb::blocked_range<std::size_t>& w) {
+          for (std::size_t k = w.begin(); k != w.end(); ++k) {
+            m_worker_chunks[k].clear();
+            work(m_worker_chunks[k]);
+          }
+        },
+        tbb::simple_partitioner());
+    for (std::size_t k = 0; k < workers; ++k)
+      m_rebuilt_chunks.insert(m_rebuilt_chunks.end(), m_worker_chunks[k].begin(), m_worker_chunks[k].end());
+  }
+  m_visits = budget.visits.load(std::memory_order_relaxed);
+  // What is left waits for the next update: pieces not started, and the rest of those a
+  // worker stopped in.
+  for (std::size_t i = 0; i < m_pieces.size(); ++i) {
+    const Range& d = m_pieces[i];
+    if (m_stop[i] == kNotStarted) {
+      m_dirty.push_back(d);
+      continue;
+    }
     if (!m_mark[d.root]) {
       m_mark[d.root] = 1;
       m_rebuilt.push_back(d.root);
     }
-    if (stop < d.hi || (stop < m_range_end && m_range_end > 0)) {
-      d.lo = stop;
-      d.hi = std::max(d.hi, m_range_end);
-      m_dirty.assign(merged.begin() + static_cast<std::ptrdiff_t>(i), merged.end());
-      break;
-    }
+    if (m_stop[i] < d.hi) m_dirty.push_back({d.root, m_stop[i], d.hi});
   }
   for (const std::uint32_t r : m_rebuilt) {
     m_mark[r] = 0;
@@ -861,17 +958,14 @@ void BoundarySurface::rebuild_ranges(const TetHierarchy& hierarchy, std::size_t 
 }
 
 // Rebuilds the units (the node on each chunk's path at the chunk level, or the shallower
-// leaf covering it) meeting chunks [lo, hi) of root r; stops early (returning the first chunk
-// not rebuilt) once max_node_visits (> 0) nodes were walked. Returns hi when done.
+// leaf covering it) meeting chunks [lo, hi) of root r, appending the lists it rewrites to
+// @p rebuilt; stops early (returning the first chunk not rebuilt) once the update's budget is
+// spent. Returns hi when done. Reads the tree and writes only the units' own lists, so
+// workers may run it on distinct pieces at once.
 std::uint32_t BoundarySurface::rebuild_range(const TetHierarchy& h, std::uint32_t r, std::uint32_t lo, std::uint32_t hi,
-                                             std::size_t max_node_visits) {
+                                             Budget& budget, std::vector<ChunkId>& rebuilt) {
   auto& ch = m_chunks[r];
   const std::uint32_t root_word = h.root_word(r);
-  if (ch.size() == 1 && m_full_chunks > 1 && TetHierarchy::state_of_word(root_word) == NodeState::Internal) {
-    ch.resize(m_full_chunks);  // first refinement: every chunk is rebuilt
-    lo = 0;
-    hi = m_full_chunks;
-  }
   const int level = ch.size() == 1 ? 0 : m_options.chunk_level;
   const std::uint32_t requested_hi = hi;
   if (level == 0) {
@@ -904,18 +998,17 @@ std::uint32_t BoundarySurface::rebuild_range(const TetHierarchy& h, std::uint32_
     const std::uint32_t ulo = c & ~(span - 1U);
     auto& out = ch[ulo];
     out.clear();
-    visit(h, wt, rk, node.depth, word, h.geometry(node), acr, out, m_visits);
-    m_rebuilt_chunks.push_back({r, ulo});
+    std::size_t visits = 0;
+    visit(h, wt, rk, node.depth, word, h.geometry(node), acr, out, visits);
+    budget.visits.fetch_add(visits, std::memory_order_relaxed);
+    rebuilt.push_back({r, ulo});
     for (std::uint32_t k = ulo + 1; k < ulo + span; ++k) {
       if (ch[k].empty()) continue;
       ch[k].clear();
-      m_rebuilt_chunks.push_back({r, k});
+      rebuilt.push_back({r, k});
     }
     c = ulo + span;
-    if (max_node_visits > 0 && m_visits >= max_node_visits && c < hi) {
-      m_range_end = hi;
-      return c;
-    }
+    if (budget.spent() && c < hi) return c;
   }
   return std::max(requested_hi, hi);
 }

@@ -10,11 +10,14 @@
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <random>
 #include <thread>
 
 #include <gtest/gtest.h>
 
 #include "ido/core/error.h"
+#include "ido/drill/boundary_surface.h"
+#include "ido/drill/erosion.h"
 #include "ido/drill/haptic_device.h"
 #include "ido/drill/lock_free.h"
 #include "ido/drill/shapes.h"
@@ -104,6 +107,65 @@ TEST(Simulator, ScriptedSessionDrillsAndRenderCopyMatches) {
   // Nothing outside the swept region went: material left ≥ block − (swept volume bound).
   const double swept = 4.0 / 3.0 * kPi * 8 + kPi * 4 * (2.0 + 2.06 + 3.5);
   EXPECT_LE(st.removed_volume_mm3, swept);
+}
+
+TEST(BoundarySurface, WorkerThreadsRebuildTheSerialLists) {
+  // The same random drilling fed to v_lists rebuilt by the calling thread alone, by 2 and by
+  // 4 workers (more than the machine's cores). Unbudgeted, every update rewrites the same
+  // chunks with the same faces and visits the same nodes; with a visit budget the workers
+  // may leave other chunks for later, but once flushed the lists are the serial ones. Under
+  // ThreadSanitizer this is the race check of the parallel rebuild.
+  std::mt19937 rng(41);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (const int level : {2, 3}) {
+    TetHierarchy h(make_block({10, 8, 6}, 2.0));
+    std::vector<BoundarySurface> exact, budgeted;
+    for (const int threads : {1, 2, 4}) {
+      exact.emplace_back(h, BoundarySurfaceOptions{.chunk_level = level, .threads = threads});
+      budgeted.emplace_back(h, BoundarySurfaceOptions{.chunk_level = level, .threads = threads});
+    }
+    Eroder eroder({.removal_rate_mm3_per_s = 0.0, .max_depth = 4, .max_node_visits = 600});
+    std::size_t updates = 0, multi = 0, left = 0;
+    for (int step = 0; step < 8; ++step) {
+      eroder.enqueue({1 + 8 * u(rng), 1 + 6 * u(rng), 1 + 4 * u(rng)}, 0.8 + 1.2 * u(rng), 1.0, 0.01);
+      while (eroder.has_pending()) {
+        (void)eroder.run(h, 600);
+        const auto changed = eroder.changed_nodes();
+        for (auto& s : exact) s.update(h, changed);
+        for (auto& s : budgeted) {
+          s.update(h, changed, 400);
+          left += s.has_pending() ? 1 : 0;
+        }
+        eroder.clear_changed_roots();
+        ++updates;
+        const BoundarySurface& serial = exact[0];
+        multi += serial.last_rebuilt_chunks().size() >= 8 ? 1 : 0;
+        for (std::size_t t = 1; t < exact.size(); ++t) {
+          ASSERT_EQ(exact[t].last_rebuilt(), serial.last_rebuilt()) << "level " << level << " update " << updates;
+          ASSERT_TRUE(exact[t].last_rebuilt_chunks() == serial.last_rebuilt_chunks()) << "update " << updates;
+          ASSERT_EQ(exact[t].last_visits(), serial.last_visits()) << "update " << updates;
+          for (const ChunkId& c : serial.last_rebuilt_chunks())
+            ASSERT_TRUE(exact[t].chunk(c.root, c.chunk) == serial.chunk(c.root, c.chunk))
+                << "level " << level << " update " << updates << " root " << c.root << " chunk " << c.chunk;
+        }
+      }
+    }
+    EXPECT_GT(multi, 10U) << "few updates had chunks to share out: the test does not test the workers";
+    EXPECT_GT(left, 10U) << "the budget never ran out";
+    for (auto& s : budgeted) {
+      s.flush(h);
+      ASSERT_FALSE(s.has_pending());
+    }
+    for (std::size_t r = 0; r < h.root_count(); ++r)
+      for (std::size_t t = 0; t < exact.size(); ++t) {
+        ASSERT_EQ(exact[t].v_list(r), exact[0].v_list(r)) << "level " << level << " root " << r;
+        ASSERT_EQ(budgeted[t].v_list(r), exact[0].v_list(r)) << "level " << level << " root " << r;
+      }
+    const BoundarySurface fresh(h, {.chunk_level = level, .threads = 2});
+    for (std::size_t r = 0; r < h.root_count(); ++r) ASSERT_EQ(fresh.v_list(r), exact[0].v_list(r)) << "root " << r;
+  }
+  const TetHierarchy small(make_block({4, 4, 4}, 2.0));
+  EXPECT_THROW(BoundarySurface(small, {.threads = -1}), InvalidInput);
 }
 
 // A 2 mm burr that cuts at once, leaves down to depth 3: plunge(0.4) into a 12 mm block drills.

@@ -38,6 +38,11 @@ struct BoundarySurfaceOptions {
   /// only the chunks holding a changed node or lying across one of its faces. 0 = whole
   /// roots. Range 0–4; default 3.
   int chunk_level = 3;
+  /// Worker threads of an update's chunk rebuilds (oneTBB): 0 = the task arena's
+  /// concurrency, 1 = the calling thread only. The chunks are independent (each reads the
+  /// tree and writes its own list), so the lists equal a serial rebuild's; only which
+  /// chunks a budgeted update leaves for the next one can differ. Default 0.
+  int threads = 0;
 };
 
 /// Names one chunk's face list: root and chunk index (depth-first order of the sub-trees at
@@ -116,9 +121,10 @@ class BoundarySurface {
     std::uint32_t root = 0;
     std::uint32_t lo = 0, hi = 0;  // chunk indices at the full chunk level
   };
+  struct Budget;
   void rebuild_ranges(const TetHierarchy& hierarchy, std::size_t max_node_visits = 0);
   std::uint32_t rebuild_range(const TetHierarchy& hierarchy, std::uint32_t r, std::uint32_t lo, std::uint32_t hi,
-                              std::size_t max_node_visits);
+                              Budget& budget, std::vector<ChunkId>& rebuilt);
   void mark_node(const TetHierarchy& hierarchy, const NodeRef& node);
   void mark_faces(const TetHierarchy& hierarchy);
   void mark_root(std::uint32_t r);
@@ -138,8 +144,11 @@ class BoundarySurface {
   };
   std::vector<FaceMark> m_face_marks;
   std::vector<std::uint8_t> m_mark;
+  std::vector<Range> m_pieces;                     // this update's rebuild units of work
+  std::vector<std::uint32_t> m_groups;              // pieces [m_groups[g], m_groups[g + 1]) form group g
+  std::vector<std::uint32_t> m_stop;                // per piece: first chunk not rebuilt
+  std::vector<std::vector<ChunkId>> m_worker_chunks;  // per worker: chunk lists it rewrote
   std::size_t m_visits = 0;
-  std::uint32_t m_range_end = 0;  // end of the range rebuild_range stopped in (0: it finished)
 };
 
 /// The welded, crack-free triangle mesh (mm) of the faces in @p v_lists on mesh vertices
