@@ -47,6 +47,7 @@ struct DrillOptions {
   double stiffness = 1.5;
   std::int64_t visit_budget = -1;  // -1: the library default
   int haptic_priority = drill::SimulatorOptions{}.haptic_realtime_priority;
+  int surface_threads = 0;  // 0: the hardware threads less one
   std::string snapshots;
   double snapshot_every_s = 0.5;
   std::string snapshot_size = "640x480";
@@ -79,6 +80,10 @@ void run(const DrillOptions& o, const GlobalOptions& /*g*/) {
     throw InvalidInput(fmt::format("--haptic-priority must be between 0 and 99, got {}", o.haptic_priority));
   }
   so.haptic_realtime_priority = o.haptic_priority;
+  if (o.surface_threads < 0) {
+    throw InvalidInput(fmt::format("--surface-threads must be 0 (automatic) or a positive count, got {}", o.surface_threads));
+  }
+  so.surface.threads = o.surface_threads;
   SnapshotOptions picture;  // one camera for every picture, looking down at 50°
   picture.azimuth_deg = 30.0;
   picture.elevation_deg = 50.0;
@@ -160,6 +165,9 @@ void setup(CLI::App& app, const GlobalOptions& g) {
   sub->add_option("--haptic-priority", opts->haptic_priority,
                   "SCHED_FIFO priority asked for the haptic thread (1-99; 0 = ordinary scheduling; default 80; "
                   "refused without CAP_SYS_NICE, see haptic_realtime in the report)");
+  sub->add_option("--surface-threads", opts->surface_threads,
+                  "Worker threads of the surface (v_list) rebuild; 0 = the hardware threads less one for the haptic "
+                  "thread (default), 1 = serial");
   sub->add_option("--snapshots", opts->snapshots, "Folder for pictures of the drilled surface: snapshot_0000.png, ...");
   sub->add_option("--snapshot-every", opts->snapshot_every_s, "Seconds of the path between pictures (default 0.5)");
   sub->add_option("--snapshot-size", opts->snapshot_size, "Picture size WIDTHxHEIGHT in pixels (default 640x480)");

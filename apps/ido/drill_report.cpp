@@ -27,6 +27,7 @@ nlohmann::json drill_session_json(const drill::TetHierarchy& hierarchy, const dr
   r["haptic_ticks"] = st.haptic_ticks;
   r["missed_1ms_deadlines"] = st.missed_deadlines;
   r["haptic_realtime"] = st.haptic_realtime;
+  r["surface_threads"] = st.surface_threads;
   r["collision_updates"] = st.collision_updates;
   r["render_snapshots"] = st.render_snapshots;
   r["force"] = {{"peak_n", st.peak_force_n}, {"mean_in_contact_n", st.mean_force_n},

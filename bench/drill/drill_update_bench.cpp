@@ -393,11 +393,13 @@ BENCHMARK(BM_BlockCensus)->DenseRange(4, 8)->Iterations(1)->Unit(benchmark::kMil
 
 // The haptic loop over a scripted trace through the three threads. Args: seconds, hybrid
 // wait spin (µs; 0 = plain sleep_until), SCHED_FIFO priority of the haptic thread (0 =
-// ordinary scheduling).
+// ordinary scheduling), v_list rebuild workers (SimulatorOptions::surface.threads: 0 = the
+// hardware threads less one, i.e. serial on 2 cores; 1 = serial; 2 = two workers).
 void BM_HapticLoop(benchmark::State& state) {
   const double seconds = static_cast<double>(state.range(0));
   const double spin_s = 1e-6 * static_cast<double>(state.range(1));
   const int priority = static_cast<int>(state.range(2));
+  const int surface_threads = static_cast<int>(state.range(3));
   SessionStats st;
   const double cpu0 = process_cpu_s();
   for (auto _ : state) {
@@ -419,6 +421,7 @@ void BM_HapticLoop(benchmark::State& state) {
     o.erosion = {.force_threshold_n = 0.2, .removal_rate_mm3_per_s = 30.0, .max_depth = 6};
     o.haptic_spin_s = spin_s;
     o.haptic_realtime_priority = priority;
+    o.surface.threads = surface_threads;
     Simulator sim(h, device, o);
     sim.run(seconds + 30.0);
     st = sim.stats();
@@ -437,10 +440,12 @@ void BM_HapticLoop(benchmark::State& state) {
   state.counters["process_cpu_s"] = process_cpu_s() - cpu0;  // all threads, incl. the spin
 }
 BENCHMARK(BM_HapticLoop)
-    ->Args({10, 0, 80})
-    ->Args({60, 0, 80})
-    ->Args({60, 0, 0})
-    ->Args({60, 150, 80})
+    ->Args({10, 0, 80, 0})
+    ->Args({60, 0, 80, 0})
+    ->Args({60, 0, 80, 2})
+    ->Args({60, 0, 0, 0})
+    ->Args({60, 0, 0, 2})
+    ->Args({60, 150, 80, 0})
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond);
 

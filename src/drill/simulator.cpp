@@ -40,6 +40,13 @@ bool request_realtime(int priority) noexcept {
 #endif
 }
 
+// The session's v_list options: threads = 0 becomes the hardware threads less one for the
+// haptic thread (at least 1).
+BoundarySurfaceOptions session_surface_options(BoundarySurfaceOptions o) {
+  if (o.threads == 0) o.threads = std::max(1, static_cast<int>(std::thread::hardware_concurrency()) - 1);
+  return o;
+}
+
 }  // namespace
 
 Percentiles percentiles(std::vector<double> v) {
@@ -64,7 +71,7 @@ Simulator::Simulator(TetHierarchy& hierarchy, HapticDevice& device, const Simula
       m_options(options),
       m_tool(options.tool),
       m_eroder(options.erosion),
-      m_surface(hierarchy, options.surface),
+      m_surface(hierarchy, session_surface_options(options.surface)),
       m_coupling(options.coupling) {
   if (!(options.haptic_period_s > 0.0) || !std::isfinite(options.haptic_period_s)) {
     throw InvalidInput("simulator: haptic period must be positive");
@@ -108,6 +115,7 @@ void Simulator::start() {
   m_finished.store(false);
   m_collision_exited.store(false);
   m_stats = {};
+  m_stats.surface_threads = m_surface.options().threads;
   m_start_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count();
   // Initial pose and contact model before the threads run.
   if (m_device.has_pose()) {

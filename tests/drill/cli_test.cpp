@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "ido/drill/tet_hierarchy.h"
+#include "ido/geometry/mesh_checks.h"
 #include "ido/io/mesh_io.h"
 #include "support/png_read.h"
 #include "support/test_support.h"
@@ -57,6 +58,34 @@ TEST(DrillCli, TetmeshThenDrillWritesConsistentOutputs) {
   ASSERT_TRUE(out.cell_fields.count("density"));
   EXPECT_EQ(out.cell_fields.at("depth").count(), out.tets.size());
   EXPECT_GT(io::read_triangle_mesh(dir / "out.stl").triangles.size(), 12U);
+}
+
+// The v_list rebuild on two workers (and serially) still gives a closed surface enclosing
+// exactly the remaining volume, and the report says how many workers ran.
+TEST(DrillCli, SurfaceThreadsGiveTheSameClosedSurface) {
+  const auto dir = test::scratch_dir("drill_cli_surface_threads");
+  const auto block = (dir / "block.vtu").string();
+  ASSERT_EQ(test::run_tool("tetmesh --shape block:16,16,8,2 -o " + block).exit_code, 0);
+  {
+    std::ofstream f(dir / "path.csv");
+    f << "t,x,y,z\n0,8,8,11\n0.25,8,8,7\n0.5,11,9,7\n0.6,11,9,11\n";
+  }
+  for (const int threads : {1, 2}) {
+    SCOPED_TRACE(threads);
+    const auto r = drill_burr_1_5(block, dir, "out.vtu",
+                                  " --surface " + (dir / "out.ply").string() + " --report " + (dir / "r.json").string() +
+                                      " --max-depth 4 --surface-threads " + std::to_string(threads));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    std::ifstream in(dir / "r.json");
+    const auto rep = nlohmann::json::parse(in);
+    EXPECT_EQ(rep["surface_threads"].get<int>(), threads);
+    const double remaining = rep["remaining_volume_mm3"];
+    EXPECT_GT(rep["removed_volume_mm3"].get<double>(), 1.0);
+    const auto s = io::read_triangle_mesh(dir / "out.ply");
+    const auto check = geometry::check_mesh(s);
+    EXPECT_EQ(check.boundary_edges, 0U);
+    EXPECT_TRUE(test::rel_near(check.signed_volume_mm3, remaining, 1e-9)) << check.signed_volume_mm3 << " vs " << remaining;
+  }
 }
 
 // With neither --max-depth nor --min-size the leaves go down to a quarter of the burr radius:
@@ -168,6 +197,11 @@ TEST(DrillCli, BadInputIsExitTwoWithAMessage) {
     EXPECT_NE(r.err.find("--haptic-priority"), std::string::npos) << r.err;
     EXPECT_FALSE(std::filesystem::exists(dir / "o.vtu"));
   }
+  r = test::run_tool("drill " + (dir / "c.vtu").string() + " --tool sphere:radius=0.3 --path " + (dir / "path.csv").string() +
+                     " -o " + (dir / "o.vtu").string() + " --surface-threads -2");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--surface-threads"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "o.vtu"));
 }
 
 }  // namespace

@@ -47,7 +47,11 @@ struct SimulatorOptions {
   double max_substep_mm = 0.0;         ///< erosion sub-steps along the motion; 0 = burr radius / 4
   std::size_t max_haptic_ticks = 1U << 20;  ///< timing samples kept (preallocated)
   double render_period_s = 1.0 / 60.0;  ///< render consumer polling period (s)
-  BoundarySurfaceOptions surface;        ///< v_list chunking
+  /// v_list chunking and rebuild workers. Here `surface.threads` = 0 (default) means one
+  /// less than the machine's hardware threads, at least 1, so that the haptic thread keeps a
+  /// core: on 2 cores the rebuild runs serially on the collision thread
+  /// (bench/results/drill.md, haptic loop with 1 and 2 workers).
+  BoundarySurfaceOptions surface;
   /// v_list rebuild work per collision update (node visits; 0 = unlimited): chunks not
   /// rebuilt yet wait for the next update, so the render copy lags by a few updates.
   /// Default 8000.
@@ -75,6 +79,7 @@ struct SessionStats {
   std::size_t missed_deadlines = 0;         ///< ticks finishing after their period ended
   bool haptic_realtime = false;              ///< the haptic thread got its real-time priority
   bool collision_realtime = false;           ///< the collision thread got its real-time priority
+  int surface_threads = 1;                   ///< v_list rebuild workers used (SimulatorOptions::surface)
   std::size_t collision_updates = 0;
   std::size_t render_snapshots = 0;          ///< snapshots consumed by the render thread
   std::size_t surface_snapshots = 0;         ///< SurfaceSnapshotFn calls
