@@ -6,6 +6,7 @@
 #include <atomic>
 #include <limits>
 #include <string>
+#include <thread>
 #include <tuple>
 #include <unordered_map>
 #include <unordered_set>
@@ -919,15 +920,26 @@ void BoundarySurface::rebuild_ranges(const TetHierarchy& hierarchy, std::size_t 
     work(m_rebuilt_chunks);
   } else {
     if (m_worker_chunks.size() < workers) m_worker_chunks.resize(workers);
+    auto worker = [&](std::size_t k) {
+      m_worker_chunks[k].clear();
+      work(m_worker_chunks[k]);
+    };
+#if defined(__SANITIZE_THREAD__)
+    // ThreadSanitizer cannot see oneTBB's happens-before edges (Debian's libtbb is not
+    // instrumented; see ido/core/parallel.h). Plain threads, started per update, let it check
+    // the workers' own reads and writes instead.
+    std::vector<std::thread> others;
+    for (std::size_t k = 1; k < workers; ++k) others.emplace_back(worker, k);
+    worker(0);
+    for (std::thread& t : others) t.join();
+#else
     tbb::parallel_for(
         tbb::blocked_range<std::size_t>(0, workers, 1),
         [&](const tbb::blocked_range<std::size_t>& w) {
-          for (std::size_t k = w.begin(); k != w.end(); ++k) {
-            m_worker_chunks[k].clear();
-            work(m_worker_chunks[k]);
-          }
+          for (std::size_t k = w.begin(); k != w.end(); ++k) worker(k);
         },
         tbb::simple_partitioner());
+#endif
     for (std::size_t k = 0; k < workers; ++k)
       m_rebuilt_chunks.insert(m_rebuilt_chunks.end(), m_worker_chunks[k].begin(), m_worker_chunks[k].end());
   }
