@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -23,6 +24,16 @@ test::CommandResult drill_burr_1_5(const std::string& block, const std::filesyst
                                    const std::string& extra = "") {
   return test::run_tool("drill " + block + " --tool sphere:radius=1.5 --path " + (dir / "path.csv").string() + " -o " +
                         (dir / out).string() + extra);
+}
+
+// Writes the block `tetmesh --shape SHAPE` into dir/block.vtu and the path CSV rows into
+// dir/path.csv; returns the block's path.
+std::string block_and_path(const std::filesystem::path& dir, const std::string& shape, const std::string& path_rows) {
+  const auto block = (dir / "block.vtu").string();
+  const auto r = test::run_tool("tetmesh --shape " + shape + " -o " + block);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  std::ofstream(dir / "path.csv") << "t,x,y,z\n" << path_rows;
+  return block;
 }
 
 TEST(DrillCli, TetmeshThenDrillWritesConsistentOutputs) {
@@ -64,12 +75,7 @@ TEST(DrillCli, TetmeshThenDrillWritesConsistentOutputs) {
 // exactly the remaining volume, and the report says how many workers ran.
 TEST(DrillCli, SurfaceThreadsGiveTheSameClosedSurface) {
   const auto dir = test::scratch_dir("drill_cli_surface_threads");
-  const auto block = (dir / "block.vtu").string();
-  ASSERT_EQ(test::run_tool("tetmesh --shape block:16,16,8,2 -o " + block).exit_code, 0);
-  {
-    std::ofstream f(dir / "path.csv");
-    f << "t,x,y,z\n0,8,8,11\n0.25,8,8,7\n0.5,11,9,7\n0.6,11,9,11\n";
-  }
+  const auto block = block_and_path(dir, "block:16,16,8,2", "0,8,8,11\n0.25,8,8,7\n0.5,11,9,7\n0.6,11,9,11\n");
   for (const int threads : {1, 2}) {
     SCOPED_TRACE(threads);
     const auto r = drill_burr_1_5(block, dir, "out.vtu",
@@ -93,12 +99,7 @@ TEST(DrillCli, SurfaceThreadsGiveTheSameClosedSurface) {
 // level 4 (0.217 mm ≤ 0.375 mm < 0.433 mm at level 3), and the cut reaches it.
 TEST(DrillCli, DefaultFinestLevelFollowsTheBurrRadius) {
   const auto dir = test::scratch_dir("drill_cli_default_depth");
-  const auto block = (dir / "block.vtu").string();
-  ASSERT_EQ(test::run_tool("tetmesh --shape block:8,8,4,2 -o " + block).exit_code, 0);
-  {
-    std::ofstream f(dir / "path.csv");
-    f << "t,x,y,z\n0,4,4,6\n0.3,4,4,3\n";
-  }
+  const auto block = block_and_path(dir, "block:8,8,4,2", "0,4,4,6\n0.3,4,4,3\n");
   const auto r = drill_burr_1_5(block, dir, "out.vtu");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto out = io::read_tet_mesh(dir / "out.vtu");
