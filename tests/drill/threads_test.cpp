@@ -83,30 +83,37 @@ ScriptedTrajectory plunge(double duration_s) {
 }
 
 TEST(Simulator, ScriptedSessionDrillsAndRenderCopyMatches) {
-  TetHierarchy h(make_block({12, 12, 12}, 3.0));
-  auto device = plunge(0.4);
-  SimulatorOptions o;
-  o.tool.burr_radius_mm = 2.0;
-  o.erosion = {.force_threshold_n = 0.05, .removal_rate_mm3_per_s = 0.0, .max_depth = 4};
-  const double before = h.material_volume();
-  Simulator sim(h, device, o);
-  sim.run(10.0);
-  const auto& st = sim.stats();
-  EXPECT_GT(st.haptic_ticks, 50U);  // no timing assertion: the machine may be loaded
-  EXPECT_GT(st.collision_updates, 10U);
-  EXPECT_GT(st.removed_volume_mm3, 1.0);
-  EXPECT_TRUE(test::rel_near(before - h.material_volume(), st.removed_volume_mm3, 1e-9));
-  EXPECT_GT(st.peak_force_n, 0.0);
-  ASSERT_FALSE(device.forces().empty());
-  // The render consumer's copy equals the authoritative v_lists.
-  const auto& mine = sim.render_v_lists();
-  const auto& truth = sim.surface().v_lists();
-  ASSERT_EQ(mine.size(), truth.size());
-  for (std::size_t r = 0; r < truth.size(); ++r) ASSERT_EQ(mine[r], truth[r]) << "root " << r;
-  EXPECT_GT(st.render_snapshots, 0U);
-  // Nothing outside the swept region went: material left ≥ block − (swept volume bound).
-  const double swept = 4.0 / 3.0 * kPi * 8 + kPi * 4 * (2.0 + 2.06 + 3.5);
-  EXPECT_LE(st.removed_volume_mm3, swept);
+  for (const int threads : {1, 2}) {
+    TetHierarchy h(make_block({12, 12, 12}, 3.0));
+    auto device = plunge(0.4);
+    SCOPED_TRACE(threads);
+    SimulatorOptions o;
+    o.surface.threads = threads;  // serial, and two v_list workers on the collision thread
+    o.tool.burr_radius_mm = 2.0;
+    o.erosion = {.force_threshold_n = 0.05, .removal_rate_mm3_per_s = 0.0, .max_depth = 4};
+    const double before = h.material_volume();
+    Simulator sim(h, device, o);
+    sim.run(10.0);
+    const auto& st = sim.stats();
+    EXPECT_GT(st.haptic_ticks, 50U);  // no timing assertion: the machine may be loaded
+    EXPECT_GT(st.collision_updates, 10U);
+    EXPECT_GT(st.removed_volume_mm3, 1.0);
+    EXPECT_TRUE(test::rel_near(before - h.material_volume(), st.removed_volume_mm3, 1e-9));
+    EXPECT_GT(st.peak_force_n, 0.0);
+    ASSERT_FALSE(device.forces().empty());
+    // The render consumer's copy equals the authoritative v_lists.
+    const auto& mine = sim.render_v_lists();
+    const auto& truth = sim.surface().v_lists();
+    ASSERT_EQ(mine.size(), truth.size());
+    for (std::size_t r = 0; r < truth.size(); ++r) ASSERT_EQ(mine[r], truth[r]) << "root " << r;
+    // ... and the incremental lists equal a serial rebuild of the final tree from scratch.
+    const auto fresh = BoundarySurface(h, {.chunk_level = o.surface.chunk_level, .threads = 1}).v_lists();
+    for (std::size_t r = 0; r < truth.size(); ++r) ASSERT_EQ(truth[r], fresh[r]) << "root " << r;
+    EXPECT_GT(st.render_snapshots, 0U);
+    // Nothing outside the swept region went: material left ≥ block − (swept volume bound).
+    const double swept = 4.0 / 3.0 * kPi * 8 + kPi * 4 * (2.0 + 2.06 + 3.5);
+    EXPECT_LE(st.removed_volume_mm3, swept);
+  }
 }
 
 TEST(BoundarySurface, WorkerThreadsRebuildTheSerialLists) {
