@@ -857,9 +857,11 @@ void BoundarySurface::rebuild_ranges(const TetHierarchy& hierarchy, std::size_t 
   m_pieces.clear();
   m_groups.clear();
   const std::uint32_t block = m_full_chunks > 1 ? m_full_chunks / 8 : 1;
+  constexpr std::uint32_t kWholeRoot = std::numeric_limits<std::uint32_t>::max();  // block of a root rebuilt as one unit
+  auto group_key = [](std::uint32_t root, std::uint32_t b) { return (static_cast<std::uint64_t>(root) << 32) | b; };
   std::uint64_t last_key = std::numeric_limits<std::uint64_t>::max();
   auto add = [&](const Range& d, std::uint32_t b) {
-    const std::uint64_t key = (static_cast<std::uint64_t>(d.root) << 32) | b;
+    const std::uint64_t key = group_key(d.root, b);
     if (key != last_key) m_groups.push_back(static_cast<std::uint32_t>(m_pieces.size()));
     last_key = key;
     m_pieces.push_back(d);
@@ -868,10 +870,10 @@ void BoundarySurface::rebuild_ranges(const TetHierarchy& hierarchy, std::size_t 
     if (m_chunks[d.root].size() == 1 ||
         TetHierarchy::state_of_word(hierarchy.root_word(d.root)) != NodeState::Internal) {
       // One unit, the root: its ranges are rebuilt once, as one piece.
-      if (!m_pieces.empty() && last_key == ((static_cast<std::uint64_t>(d.root) << 32) | 0xFFFFFFFFU)) {
+      if (!m_pieces.empty() && last_key == group_key(d.root, kWholeRoot)) {
         m_pieces.back().hi = std::max(m_pieces.back().hi, d.hi);
       } else {
-        add(d, 0xFFFFFFFFU);
+        add(d, kWholeRoot);
       }
       return;
     }
@@ -913,9 +915,8 @@ void BoundarySurface::rebuild_ranges(const TetHierarchy& hierarchy, std::size_t 
       }
     }
   };
-  const int arena = tbb::this_task_arena::max_concurrency();
-  const std::size_t workers =
-      std::min<std::size_t>(groups, static_cast<std::size_t>(m_options.threads > 0 ? m_options.threads : arena));
+  const int threads = m_options.threads > 0 ? m_options.threads : tbb::this_task_arena::max_concurrency();
+  const std::size_t workers = std::min<std::size_t>(groups, static_cast<std::size_t>(threads));
   if (workers <= 1) {
     work(m_rebuilt_chunks);
   } else {
