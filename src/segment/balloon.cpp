@@ -25,6 +25,19 @@ namespace ido::segment {
 
 namespace {
 
+// Adds the wall-clock time of its scope to a phase's total.
+class PhaseTimer {
+ public:
+  explicit PhaseTimer(double& total) : total_(total), start_(std::chrono::steady_clock::now()) {}
+  PhaseTimer(const PhaseTimer&) = delete;
+  PhaseTimer& operator=(const PhaseTimer&) = delete;
+  ~PhaseTimer() { total_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count(); }
+
+ private:
+  double& total_;
+  std::chrono::steady_clock::time_point start_;
+};
+
 // The bits of a position: a vertex the remesher left where it was is found again by them.
 struct PositionKey {
   std::uint64_t x, y, z;
@@ -189,6 +202,7 @@ struct Balloon::State {
     return true;
   }
   void remesh() {
+    const PhaseTimer timer(report.phase_seconds.remesh);
     meshing::SurfaceRemesher r(mesh(), locked_flags());
     const double target = opt.edge_length_voxels * h;
     r.split_long_edges(4.0 / 3.0 * target);
@@ -216,6 +230,7 @@ struct Balloon::State {
     return l;
   }
   void repair(const std::vector<std::pair<std::int32_t, std::int32_t>>& pairs, bool do_remesh) {
+    const PhaseTimer timer(report.phase_seconds.repair);
     TopologyRepairOptions ro;
     ro.grid_spacing_mm = h;
     ro.target_edge_mm = opt.edge_length_voxels * h;
@@ -229,8 +244,12 @@ struct Balloon::State {
     ++report.repairs;
   }
   // Handles intersections: freeze the vertices involved, then rebuild the surface.
+  std::vector<std::pair<std::int32_t, std::int32_t>> intersecting_pairs() {
+    const PhaseTimer timer(report.phase_seconds.intersections);
+    return geometry::self_intersections(mesh(), {.threaded = opt.threaded});
+  }
   void handle_intersections() {
-    const auto pairs = geometry::self_intersections(mesh(), {.threaded = opt.threaded});
+    const auto pairs = intersecting_pairs();
     if (pairs.empty()) return;
     for (const auto& [a, b] : pairs)
       for (std::int32_t t : {a, b})
@@ -244,6 +263,7 @@ struct Balloon::State {
   // One explicit step of the first-order dynamics. edge_stage switches the intensity
   // inflation for the edge attraction where a wall is within reach.
   void move(bool edge_stage) {
+    const PhaseTimer timer(report.phase_seconds.move);
     const auto d = surface_differentials(particles.positions(), triangles);
     auto& x = particles.positions();
     auto& v = particles.velocities();
@@ -503,6 +523,7 @@ Balloon::Balloon(const image::Volume<float>& ct, const std::vector<Vec3>& seeds_
     for (const Tri& t : ico.triangles) all.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
   }
   m->set_mesh(all, {});
+  m->report.phase_seconds.setup = std::chrono::duration<double>(std::chrono::steady_clock::now() - m->start).count();
   if (seeds_mm.size() > 1) m->handle_intersections();
   m->last_window_volume = m->volume();
 }
@@ -568,13 +589,13 @@ BalloonResult Balloon::run(Progress* progress) {
   }
   // Final guarantee: no self-intersection. A repair without remeshing gives the zero level
   // of a signed distance, which cannot intersect itself.
-  auto pairs = geometry::self_intersections(s.mesh(), {.threaded = s.opt.threaded});
+  auto pairs = s.intersecting_pairs();
   if (!pairs.empty()) {
     s.repair(pairs, true);
-    pairs = geometry::self_intersections(s.mesh(), {.threaded = s.opt.threaded});
+    pairs = s.intersecting_pairs();
     if (!pairs.empty()) {
       s.repair(pairs, false);
-      pairs = geometry::self_intersections(s.mesh(), {.threaded = s.opt.threaded});
+      pairs = s.intersecting_pairs();
     }
   }
   BalloonResult out;

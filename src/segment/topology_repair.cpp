@@ -73,7 +73,10 @@ geometry::TriangleMesh repair_topology(
   const image::Volume<float> grid(size, Vec3::Constant(h), origin);
   meshing::SignedDistanceOptions sd;
   sd.threaded = options.threaded;
-  sd.band_mm = 2.0 * h;
+  // Marching cubes reads only the ends of grid edges the zero level crosses, within one
+  // spacing of the surface: a band just above the spacing gives the same level as a wider one
+  // (bit for bit on the three real cases) with far fewer distance queries than 2 h.
+  sd.band_mm = 1.05 * h;
   if (!intersecting_pairs.empty()) {
     sd.distance_triangles.assign(mesh.triangles.size(), 1);
     for (const auto& [a, b] : intersecting_pairs) {

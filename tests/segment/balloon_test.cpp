@@ -455,31 +455,36 @@ TEST(TopologyRepair, MergesOverlapsIntoAValidSurfaceOfTheRightTopology) {
 // The repair's signed distance evaluates the winding number only within about a grid spacing
 // of the surface (and near uncounted triangles) and takes every other sign from a neighbour
 // or a connected component. The full path — the winding number at every grid point, the
-// distance to the nearest counted triangle by brute force — must give the same field.
+// distance to the nearest counted triangle by brute force — must give the same field. Both
+// sign methods: the crossing parity these closed meshes take by default, and the winding
+// number with its safe-step components.
 void expect_field_equals_full_evaluation(const geometry::TriangleMesh& m, const image::Volume<float>& grid,
-                                         const meshing::SignedDistanceOptions& o) {
-  const image::Volume<float> f = meshing::signed_distance(m, grid, o);
-  const geometry::WindingNumber winding(m, {.beta = o.winding_beta});
-  std::int64_t wrong_sign = 0, wrong_distance = 0, inside = 0;
-  for (std::int64_t k = 0; k < grid.size(2); ++k)
-    for (std::int64_t j = 0; j < grid.size(1); ++j)
-      for (std::int64_t i = 0; i < grid.size(0); ++i) {
-        const Vec3 p = grid.index_to_world(Vec3(double(i), double(j), double(k)));
-        const bool in = winding.at(p) > 0.5;
-        inside += in ? 1 : 0;
-        if ((f(i, j, k) < 0.0f) != in) ++wrong_sign;
-        double d = o.band_mm;
-        for (std::size_t t = 0; t < m.triangles.size(); ++t) {
-          if (!o.distance_triangles.empty() && !o.distance_triangles[t]) continue;
-          const Tri& tr = m.triangles[t];
-          const Vec3 c = meshing::closest_point_on_triangle_mm(p, m.vertices[tr[0]], m.vertices[tr[1]], m.vertices[tr[2]]);
-          d = std::min(d, (c - p).norm());
+                                         meshing::SignedDistanceOptions o) {
+  for (const auto method : {meshing::SignMethod::automatic, meshing::SignMethod::winding_number}) {
+    o.sign = method;
+    const image::Volume<float> f = meshing::signed_distance(m, grid, o);
+    const geometry::WindingNumber winding(m, {.beta = o.winding_beta});
+    std::int64_t wrong_sign = 0, wrong_distance = 0, inside = 0;
+    for (std::int64_t k = 0; k < grid.size(2); ++k)
+      for (std::int64_t j = 0; j < grid.size(1); ++j)
+        for (std::int64_t i = 0; i < grid.size(0); ++i) {
+          const Vec3 p = grid.index_to_world(Vec3(double(i), double(j), double(k)));
+          const bool in = winding.at(p) > 0.5;
+          inside += in ? 1 : 0;
+          if ((f(i, j, k) < 0.0f) != in) ++wrong_sign;
+          double d = o.band_mm;
+          for (std::size_t t = 0; t < m.triangles.size(); ++t) {
+            if (!o.distance_triangles.empty() && !o.distance_triangles[t]) continue;
+            const Tri& tr = m.triangles[t];
+            const Vec3 c = meshing::closest_point_on_triangle_mm(p, m.vertices[tr[0]], m.vertices[tr[1]], m.vertices[tr[2]]);
+            d = std::min(d, (c - p).norm());
+          }
+          if (std::abs(std::abs(double(f(i, j, k))) - d) > 1e-5) ++wrong_distance;
         }
-        if (std::abs(std::abs(double(f(i, j, k))) - d) > 1e-5) ++wrong_distance;
-      }
-  EXPECT_GT(inside, 0);
-  EXPECT_EQ(wrong_sign, 0);
-  EXPECT_EQ(wrong_distance, 0);
+    EXPECT_GT(inside, 0);
+    EXPECT_EQ(wrong_sign, 0) << int(method);
+    EXPECT_EQ(wrong_distance, 0) << int(method);
+  }
 }
 
 TEST(TopologyRepair, SignedDistanceFastSignEqualsWindingNumberEverywhere) {

@@ -9,6 +9,16 @@
 
 namespace ido::meshing {
 
+/// How signed_distance() decides inside from outside.
+enum class SignMethod {
+  /// Crossing parity when the surface is closed and consistently oriented (every directed
+  /// edge appears once and its reverse exactly once; self-intersections allowed), the
+  /// generalised winding number otherwise.
+  automatic,
+  /// Always the hierarchical generalised winding number (geometry::WindingNumber).
+  winding_number,
+};
+
 /// Tunables of signed_distance().
 struct SignedDistanceOptions {
   /// Half-width (mm) of the band around the surface where distances are exact; outside it
@@ -23,13 +33,19 @@ struct SignedDistanceOptions {
   /// cluster is replaced by its far-field expansion when the query is farther than
   /// beta × the cluster's radius (Barill et al. 2018 use 2).
   double winding_beta = 2.0;
+  SignMethod sign = SignMethod::automatic;  ///< see SignMethod
   bool threaded = true;  ///< use oneTBB
 };
 
 /// Signed distance (mm) from a closed triangle surface, sampled on the grid of @p grid
 /// (its size, spacing, origin and direction; its voxel values are ignored): negative inside,
-/// where inside means generalised winding number (geometry::WindingNumber) > 0.5, so
-/// self-intersecting or slightly open surfaces still get a sensible inside. Within
+/// where inside means winding number > 0.5, so self-intersecting surfaces (overlaps count
+/// twice) and slightly open ones still get a sensible inside. On a closed, consistently
+/// oriented surface the winding number is an integer off the surface and is computed exactly
+/// by counting signed crossings along each grid row (the exact orient2d sign with a
+/// symbolic perturbation of the row, so rows through an edge or a vertex count once); a
+/// grid point lying exactly on the surface takes the side just before it along the row. Other surfaces use the generalised
+/// winding number (geometry::WindingNumber, see options.sign). Within
 /// options.band_mm of the surface the magnitude is the exact Euclidean distance to the
 /// nearest counted triangle (an inside point lying on a triangle gets −FLT_MIN, never 0:
 /// inside values are strictly negative); beyond it, the value is ±band_mm. The winding number
@@ -38,6 +54,9 @@ struct SignedDistanceOptions {
 /// connected component of such points, which is exact because a grid step from a point
 /// farther than a spacing from every triangle cannot cross the surface (it needs band_mm
 /// above the largest spacing). Runs in O(triangles × band voxels + grid voxels).
+/// A marching-cubes extraction of the zero level reads only values at the ends of grid edges
+/// the level crosses, which lie within one spacing of a counted triangle when the crossing
+/// is theirs: a band a little above the largest spacing gives the same level.
 /// @throws ido::InvalidInput if the grid is empty, the mesh has no triangles, an index is
 /// out of range, or distance_triangles has the wrong size.
 [[nodiscard]] image::Volume<float> signed_distance(const geometry::TriangleMesh& surface,

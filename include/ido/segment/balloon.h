@@ -90,6 +90,12 @@ struct BalloonReport {
   IntensityModel model;             ///< reference and tolerance used
   std::int64_t iterations = 0;      ///< inflation + edge steps
   double seconds = 0;               ///< wall-clock time of the run
+  /// Where the wall-clock time went (s): set-up (smoothing, gradient, intensity model), the
+  /// steps' moves (forces and edge search), remeshing, self-intersection searches and
+  /// topology repairs (signed distance, marching cubes and the remesh of the new surface).
+  struct Phases {
+    double setup = 0, move = 0, remesh = 0, intersections = 0, repair = 0;
+  } phase_seconds;
   double volume_mm3 = 0, area_mm2 = 0;
   std::int64_t vertices = 0, edges = 0, triangles = 0, euler_characteristic = 0, components = 0;
   bool closed = false, manifold = false, oriented = false;
