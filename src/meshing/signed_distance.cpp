@@ -12,6 +12,7 @@
 
 #include "ido/core/error.h"
 #include "ido/core/parallel.h"
+#include "ido/geometry/mesh_topology.h"
 #include "ido/geometry/predicates.h"
 #include "ido/geometry/winding_number.h"
 
@@ -19,21 +20,14 @@ namespace ido::meshing {
 
 namespace {
 
-// Every directed edge appears once and its reverse exactly once: then the winding number
-// is an integer off the surface, 0 far away, and changes by ±1 across each triangle.
+// Every edge is run once each way (a closed, consistently oriented surface): then the
+// winding number is an integer off the surface, 0 far away, and changes by ±1 across each
+// triangle.
 bool closed_and_oriented(const geometry::TriangleMesh& m) {
-  std::vector<std::uint64_t> keys;
-  keys.reserve(3 * m.triangles.size());
-  for (const Tri& t : m.triangles)
-    for (int e = 0; e < 3; ++e)
-      keys.push_back((std::uint64_t(std::uint32_t(t[e])) << 32) | std::uint32_t(t[(e + 1) % 3]));
-  std::sort(keys.begin(), keys.end());
-  if (std::adjacent_find(keys.begin(), keys.end()) != keys.end()) return false;
-  for (const std::uint64_t k : keys) {
-    const std::uint64_t reverse = (k << 32) | (k >> 32);
-    if (!std::binary_search(keys.begin(), keys.end(), reverse)) return false;
-  }
-  return true;
+  const geometry::EdgeMap map = geometry::build_edge_map(m);
+  return std::all_of(map.edges.begin(), map.edges.end(), [](const geometry::EdgeInfo& e) {
+    return e.forward == 1 && e.backward == 1 && e.vertices[0] != e.vertices[1];
+  });
 }
 
 // Sign of orient2d(a, b, p) with p moved to p + (ε, ε²), ε → 0⁺ (a symbolic perturbation):
@@ -233,8 +227,8 @@ image::Volume<float> signed_distance(const geometry::TriangleMesh& surface,
     mark_inside_by_crossings(surface, grid, dist, options.threaded);
     return out;
   }
-  // Sign (a surface that is not closed). The winding number of a closed surface is constant off it, so two 6-neighbours p, q
-  // (a spacing L apart) share it when the segment pq misses every triangle. The distance to
+  // Sign of any other surface, by the generalised winding number. It is constant off a
+  // closed surface, so two 6-neighbours p, q (a spacing L apart) share it when the segment pq misses every triangle. The distance to
   // the surface is 1-Lipschitz, so along pq it stays above (d(p) + d(q) − L) / 2: the step is
   // safe when d(p) + d(q) > L. Grid points joined by safe steps form components that take the
   // sign of one winding-number evaluation each; only points with no safe step (on or very

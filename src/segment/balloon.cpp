@@ -243,11 +243,12 @@ struct Balloon::State {
     if (!wall_search.empty()) wall_search.assign(particles.size(), WallSearch{});
     ++report.repairs;
   }
-  // Handles intersections: freeze the vertices involved, then rebuild the surface.
+  // The intersecting triangle pairs of the present surface (timed as a phase).
   std::vector<std::pair<std::int32_t, std::int32_t>> intersecting_pairs() {
     const PhaseTimer timer(report.phase_seconds.intersections);
     return geometry::self_intersections(mesh(), {.threaded = opt.threaded});
   }
+  // Handles intersections: freeze the vertices involved, then rebuild the surface.
   void handle_intersections() {
     const auto pairs = intersecting_pairs();
     if (pairs.empty()) return;

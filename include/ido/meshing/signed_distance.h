@@ -44,14 +44,15 @@ struct SignedDistanceOptions {
 /// oriented surface the winding number is an integer off the surface and is computed exactly
 /// by counting signed crossings along each grid row (the exact orient2d sign with a
 /// symbolic perturbation of the row, so rows through an edge or a vertex count once); a
-/// grid point lying exactly on the surface takes the side just before it along the row. Other surfaces use the generalised
-/// winding number (geometry::WindingNumber, see options.sign). Within
+/// grid point lying exactly on the surface takes the side just before it along the row.
+/// Other surfaces use the generalised winding number (geometry::WindingNumber, see
+/// options.sign). Within
 /// options.band_mm of the surface the magnitude is the exact Euclidean distance to the
 /// nearest counted triangle (an inside point lying on a triangle gets −FLT_MIN, never 0:
-/// inside values are strictly negative); beyond it, the value is ±band_mm. The winding number
-/// is evaluated only at grid points within about the grid's largest spacing of the surface
-/// (or of an uncounted triangle); every other grid point takes the sign of one evaluation per
-/// connected component of such points, which is exact because a grid step from a point
+/// inside values are strictly negative); beyond it, the value is ±band_mm. The generalised
+/// winding number is evaluated only at grid points within about the grid's largest spacing
+/// of the surface (or of an uncounted triangle); every other grid point takes the sign of one
+/// evaluation per connected component of such points, which is exact because a grid step from a point
 /// farther than a spacing from every triangle cannot cross the surface (it needs band_mm
 /// above the largest spacing). Runs in O(triangles × band voxels + grid voxels).
 /// A marching-cubes extraction of the zero level reads only values at the ends of grid edges
