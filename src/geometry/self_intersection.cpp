@@ -8,9 +8,11 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <string>
 
 #include <tbb/task_arena.h>
 
+#include "ido/core/error.h"
 #include "ido/core/parallel.h"
 #include "ido/geometry/aabb.h"
 #include "ido/geometry/bvh.h"
@@ -370,6 +372,17 @@ class CellLists {
     return visits;
   }
 
+  /// Inserts triangle @p t into every cell of @p r, without visiting the lists.
+  void insert(const Grid& grid, const CellRange& r, std::int32_t t) {
+    for (std::uint32_t z = r.lo[2]; z <= r.hi[2]; ++z)
+      for (std::uint32_t y = r.lo[1]; y <= r.hi[1]; ++y)
+        for (std::uint32_t x = r.lo[0]; x <= r.hi[0]; ++x) {
+          std::uint32_t& cell_head = m_head[grid.key(x, y, z)];
+          m_entries.push_back({cell_head, t});
+          cell_head = static_cast<std::uint32_t>(m_entries.size());
+        }
+  }
+
   [[nodiscard]] std::size_t entries() const { return m_entries.size(); }
 
  private:
@@ -619,11 +632,85 @@ Pairs find_pairs(const TriangleMesh& mesh, const SelfIntersectionOptions& option
   return bvh.self_pairs(accept, options.threaded);
 }
 
+/// The pairs with at least one flagged triangle, on the grid: every triangle is boxed and
+/// inserted (no visits), then each flagged triangle visits the cells of its box, taking an
+/// unflagged neighbour always and a flagged one only when its index is higher (so each pair
+/// once; the owner rule keeps a pair to one cell). Returns false when the grid gives up.
+bool grid_pairs_touching(const TriangleMesh& mesh, const Grid& grid, const std::vector<std::uint8_t>& changed,
+                         bool threaded, Pairs& out) {
+  const std::size_t n = mesh.triangles.size();
+  const auto& vertices = mesh.vertices;
+  std::vector<CellBox> boxes(n);
+  CellLists lists(grid, 4 * n);
+  std::vector<std::int32_t> flagged;
+  for (std::size_t ts = 0; ts < n; ++ts) {
+    const Tri& tri = mesh.triangles[ts];
+    boxes[ts] = cell_box(grid, vertices[static_cast<std::size_t>(tri[0])], vertices[static_cast<std::size_t>(tri[1])],
+                         vertices[static_cast<std::size_t>(tri[2])]);
+    lists.insert(grid, cell_range(grid, boxes[ts]), static_cast<std::int32_t>(ts));
+    if (lists.entries() > entry_budget(n)) return false;
+    if (changed[ts]) flagged.push_back(static_cast<std::int32_t>(ts));
+  }
+  constexpr std::size_t kChunk = 256;
+  const std::size_t chunks = (flagged.size() + kChunk - 1) / kChunk;
+  std::vector<Pairs> hits(chunks);
+  std::atomic<std::size_t> visits{0};
+  const std::size_t max_visits = visit_budget(n);
+  parallel_for(
+      chunks,
+      [&](std::size_t c) {
+        std::vector<std::int32_t> candidates;
+        std::size_t local_visits = 0;
+        for (std::size_t f = c * kChunk; f < std::min(flagged.size(), (c + 1) * kChunk); ++f) {
+          const std::int32_t t = flagged[f];
+          const auto ts = static_cast<std::size_t>(t);
+          candidates.clear();
+          local_visits += lists.visit<false>(grid, boxes, boxes[ts], cell_range(grid, boxes[ts]),
+                                                                     t, candidates);
+          const Tri& tri = mesh.triangles[ts];
+          const Plane pt = plane_of(vertices[static_cast<std::size_t>(tri[0])], vertices[static_cast<std::size_t>(tri[1])],
+                                    vertices[static_cast<std::size_t>(tri[2])]);
+          for (const std::int32_t u : candidates) {
+            if (u == t || (changed[static_cast<std::size_t>(u)] && u < t)) continue;
+            if (filtered_pair_intersects(vertices, tri, pt, mesh.triangles[static_cast<std::size_t>(u)]))
+              hits[c].emplace_back(std::min(u, t), std::max(u, t));
+          }
+        }
+        visits += local_visits;
+      },
+      threaded, 1);
+  if (visits.load() > max_visits) return false;
+  Pairs found;
+  for (const Pairs& h : hits) found.insert(found.end(), h.begin(), h.end());
+  std::sort(found.begin(), found.end());
+  out = std::move(found);
+  return true;
+}
+
 }  // namespace
 
 std::vector<std::pair<std::int32_t, std::int32_t>> self_intersections(
     const TriangleMesh& mesh, const SelfIntersectionOptions& options) {
   return find_pairs(mesh, options, false);
+}
+
+std::vector<std::pair<std::int32_t, std::int32_t>> self_intersections_touching(
+    const TriangleMesh& mesh, const std::vector<std::uint8_t>& changed, const SelfIntersectionOptions& options) {
+  if (changed.size() != mesh.triangles.size())
+    throw InvalidInput("self intersections: one changed flag per triangle is needed (" +
+                       std::to_string(mesh.triangles.size()) + "), got " + std::to_string(changed.size()));
+  validate_mesh(mesh);
+  Pairs out;
+  if (mesh.triangles.size() < 2 || std::none_of(changed.begin(), changed.end(), [](std::uint8_t c) { return c != 0; }))
+    return out;
+  Grid grid;
+  if (plan_grid(mesh, grid) && grid_pairs_touching(mesh, grid, changed, options.threaded, out)) return out;
+  // No sensible grid: the whole search, keeping the pairs with a flagged triangle.
+  out = find_pairs(mesh, options, false);
+  std::erase_if(out, [&](const auto& p) {
+    return !changed[static_cast<std::size_t>(p.first)] && !changed[static_cast<std::size_t>(p.second)];
+  });
+  return out;
 }
 
 bool has_self_intersections(const TriangleMesh& mesh, const SelfIntersectionOptions& options) {

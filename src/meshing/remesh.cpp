@@ -79,6 +79,10 @@ struct SurfaceRemesher::Impl {
     }
     return n;
   }
+  // Whether the edge a-b takes part (see set_active).
+  static bool edge_active(const SurfaceRemesher& r, std::int32_t a, std::int32_t b) {
+    return r.m_active.empty() || r.m_active[std::size_t(a)] || r.m_active[std::size_t(b)];
+  }
   // Vertex of triangle t that is neither a nor b.
   static std::int32_t opposite(const Tri& t, std::int32_t a, std::int32_t b) {
     for (std::int32_t v : t)
@@ -128,6 +132,9 @@ struct SurfaceRemesher::Impl {
     r.m_vertex_alive.push_back(1);
     r.m_locked.push_back(locked);
     r.m_vertex_triangles.emplace_back();
+    r.m_moved.push_back(1);
+    r.m_touched.push_back(1);
+    if (!r.m_active.empty()) r.m_active.push_back(1);
     ++r.m_alive_vertices;
     return id;
   }
@@ -141,6 +148,9 @@ SurfaceRemesher::SurfaceRemesher(const geometry::TriangleMesh& mesh, std::vector
                        std::to_string(nv) + "), got " + std::to_string(locked.size()));
   m_locked = locked.empty() ? std::vector<std::uint8_t>(m_vertices.size(), 0) : std::move(locked);
   m_vertex_alive.assign(m_vertices.size(), 1);
+  m_moved.assign(m_vertices.size(), 0);
+  m_touched.assign(m_vertices.size(), 0);
+  m_input_vertices = m_vertices.size();
   m_triangle_alive.assign(m_triangles.size(), 1);
   m_vertex_triangles.assign(m_vertices.size(), {});
   m_alive_vertices = nv;
@@ -199,6 +209,13 @@ SurfaceRemesher::SurfaceRemesher(const geometry::TriangleMesh& mesh, std::vector
   }
 }
 
+void SurfaceRemesher::set_active(std::vector<std::uint8_t> active) {
+  if (!active.empty() && active.size() != m_vertices.size())
+    throw InvalidInput("remesh: active flags must be empty or one per vertex (" + std::to_string(m_vertices.size()) +
+                       "), got " + std::to_string(active.size()));
+  m_active = std::move(active);
+}
+
 std::int64_t SurfaceRemesher::split_long_edges(double max_length_mm) {
   const double max2 = max_length_mm * max_length_mm;
   // Each edge of triangle t with a < b (once per triangle pair: the twin has a > b) that is
@@ -207,7 +224,7 @@ std::int64_t SurfaceRemesher::split_long_edges(double max_length_mm) {
     const Tri& tr = m_triangles[t];
     for (int k = 0; k < 3; ++k) {
       const std::int32_t a = tr[k], b = tr[(k + 1) % 3];
-      if (a > b) continue;
+      if (a > b || !Impl::edge_active(*this, a, b)) continue;
       const double l2 = (m_vertices[a] - m_vertices[b]).squaredNorm();
       if (l2 > max2) take(EdgeItem{l2, edge_key(a, b)});
     }
@@ -230,6 +247,7 @@ std::int64_t SurfaceRemesher::split_long_edges(double max_length_mm) {
     if (!Impl::runs(m_triangles[t1], a, b)) std::swap(t1, t2);
     const std::int32_t c = Impl::opposite(m_triangles[t1], a, b);
     const std::int32_t d = Impl::opposite(m_triangles[t2], a, b);
+    for (std::int32_t w : {a, b, c, d}) m_touched[std::size_t(w)] = 1;
     const std::int32_t m = Impl::add_vertex(*this, 0.5 * (m_vertices[a] + m_vertices[b]),
                                             std::uint8_t(m_locked[a] && m_locked[b]));
     // t1 (a,b,c) → (a,m,c) + (m,b,c); t2 (b,a,d) → (b,m,d) + (m,a,d).
@@ -257,7 +275,7 @@ std::int64_t SurfaceRemesher::collapse_short_edges(double min_length_mm, double 
     const Tri& tr = m_triangles[t];
     for (int k = 0; k < 3; ++k) {
       const std::int32_t a = tr[k], b = tr[(k + 1) % 3];
-      if (a > b) continue;
+      if (a > b || !Impl::edge_active(*this, a, b)) continue;
       const double l2 = (m_vertices[a] - m_vertices[b]).squaredNorm();
       if (l2 < min2) batch.emplace_back(l2, edge_key(a, b));
     }
@@ -340,7 +358,10 @@ std::int64_t SurfaceRemesher::collapse_short_edges(double min_length_mm, double 
     }
     moved.assign(m_vertex_triangles[a].begin(), m_vertex_triangles[a].end());
     for (std::int32_t t : moved) Impl::replace_in_triangle(*this, t, a, b);
+    if (target != m_vertices[b]) m_moved[std::size_t(b)] = 1;
+    for (std::int32_t w : {b, common[0], common[1]}) m_touched[std::size_t(w)] = 1;
     m_vertices[b] = target;
+    if (!m_active.empty()) m_active[std::size_t(b)] = 1;
     m_vertex_alive[a] = 0;
     m_vertex_triangles[a].clear();
     --m_alive_vertices;
@@ -376,7 +397,7 @@ std::int64_t SurfaceRemesher::flip_edges() {
       // The valence test below changes each of the four |v − 6| terms by ±1 and needs a net
       // fall of at least 2, so at least one end of the edge must have valence ≥ 7: skip the
       // lookups otherwise (the same decision, made earlier).
-      if (valence(a) < 7 && valence(b) < 7) continue;
+      if ((valence(a) < 7 && valence(b) < 7) || !Impl::edge_active(*this, a, b)) continue;
       std::int32_t ts[2];
       if (Impl::edge_triangles(*this, a, b, ts) != 2) continue;
       std::int32_t t1 = ts[0], t2 = ts[1];
@@ -410,6 +431,7 @@ std::int64_t SurfaceRemesher::flip_edges() {
       // Flip in place: t1 (a,b,c) → (a,d,c); t2 (b,a,d) → (d,b,c).
       Impl::replace_in_triangle(*this, t1, b, d);  // (a,d,c)
       Impl::replace_in_triangle(*this, t2, a, c);  // (b,c,d) ≡ (d,b,c)
+      for (std::int32_t w : {a, b, c, d}) m_touched[std::size_t(w)] = 1;
       --valences[std::size_t(a)];
       --valences[std::size_t(b)];
       ++valences[std::size_t(c)];
@@ -425,7 +447,8 @@ void SurfaceRemesher::relax_tangentially(double weight) {
   std::vector<Vec3> next = m_vertices;
   std::vector<std::int32_t> nb;
   for (std::size_t v = 0; v < nv; ++v) {
-    if (!m_vertex_alive[v] || m_locked[v] || m_vertex_triangles[v].empty()) continue;
+    if (!m_vertex_alive[v] || m_locked[v] || m_vertex_triangles[v].empty() || (!m_active.empty() && !m_active[v]))
+      continue;
     Vec3 normal = Vec3::Zero();
     for (std::int32_t t : m_vertex_triangles[v]) {
       const Tri& tr = m_triangles[t];
@@ -441,6 +464,7 @@ void SurfaceRemesher::relax_tangentially(double weight) {
     Vec3 step = centroid - m_vertices[v];
     step -= normal * normal.dot(step);
     next[v] = m_vertices[v] + weight * step;
+    if (next[v] != m_vertices[v]) m_moved[v] = m_touched[v] = 1;
   }
   m_vertices = std::move(next);
 }
@@ -475,6 +499,21 @@ geometry::TriangleMesh SurfaceRemesher::mesh() const {
     const Tri& tr = m_triangles[t];
     out.triangles.push_back(Tri{remap[tr[0]], remap[tr[1]], remap[tr[2]]});
   }
+  return out;
+}
+
+std::vector<std::int32_t> SurfaceRemesher::input_index() const {
+  std::vector<std::int32_t> out;
+  for (std::size_t v = 0; v < m_vertices.size(); ++v)
+    if (m_vertex_alive[v] && !m_vertex_triangles[v].empty())
+      out.push_back(v < m_input_vertices && !m_moved[v] ? static_cast<std::int32_t>(v) : -1);
+  return out;
+}
+
+std::vector<std::uint8_t> SurfaceRemesher::touched() const {
+  std::vector<std::uint8_t> out;
+  for (std::size_t v = 0; v < m_vertices.size(); ++v)
+    if (m_vertex_alive[v] && !m_vertex_triangles[v].empty()) out.push_back(m_touched[v]);
   return out;
 }
 

@@ -7,9 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <map>
-#include <cstring>
 #include <string>
-#include <unordered_map>
 
 #include "ido/core/error.h"
 #include "ido/core/log.h"
@@ -37,24 +35,6 @@ class PhaseTimer {
   double& total_;
   std::chrono::steady_clock::time_point start_;
 };
-
-// The bits of a position: a vertex the remesher left where it was is found again by them.
-struct PositionKey {
-  std::uint64_t x, y, z;
-  bool operator==(const PositionKey&) const = default;
-};
-struct PositionKeyHash {
-  std::size_t operator()(const PositionKey& k) const noexcept {
-    return std::size_t((k.x * 0x9E3779B97F4A7C15ull) ^ (k.y * 0xBF58476D1CE4E5B9ull) ^ (k.z * 0x94D049BB133111EBull));
-  }
-};
-PositionKey position_key(const Vec3& p) {
-  PositionKey k;
-  std::memcpy(&k.x, &p[0], sizeof k.x);
-  std::memcpy(&k.y, &p[1], sizeof k.y);
-  std::memcpy(&k.z, &p[2], sizeof k.z);
-  return k;
-}
 
 }  // namespace
 
@@ -157,6 +137,18 @@ struct Balloon::State {
     int reused = 0;
   };
   std::vector<WallSearch> wall_search;
+  // The active front while inflating (BalloonOptions::sleep_steps): per vertex, how many steps
+  // in a row it and its one-ring moved at most sleep_move_voxels (saturating). Carried through a
+  // remesh for the vertices it left in place; emptied (every vertex awake) by a repair.
+  std::vector<std::uint8_t> quiet;
+  bool inflating = true;  // false from the edge stage on (no sleeping there)
+  // Per vertex: moved, or one of its triangles re-connected, since the last self-intersection
+  // search that found none (empty = every vertex). The next search then tests only the
+  // triangles with such a corner against the others (geometry::self_intersections_touching).
+  std::vector<std::uint8_t> dirty;
+  bool asleep(std::size_t i) const {
+    return inflating && opt.sleep_steps > 0 && i < quiet.size() && quiet[i] >= opt.sleep_steps;
+  }
 
   // The fitter whose σ is nearest the blur along @p normal: pre-smoothing plus the scanner's
   // blur and the voxel's partial-volume box along each grid axis.
@@ -204,23 +196,39 @@ struct Balloon::State {
   void remesh() {
     const PhaseTimer timer(report.phase_seconds.remesh);
     meshing::SurfaceRemesher r(mesh(), locked_flags());
+    const bool sleeping = inflating && opt.sleep_steps > 0 && quiet.size() == particles.size();
+    if (sleeping) {
+      // Edges between two sleepers have not changed since the last remesh.
+      std::vector<std::uint8_t> active(particles.size());
+      for (std::size_t i = 0; i < active.size(); ++i) active[i] = asleep(i) ? 0 : 1;
+      r.set_active(std::move(active));
+    }
     const double target = opt.edge_length_voxels * h;
     r.split_long_edges(4.0 / 3.0 * target);
     r.collapse_short_edges(0.8 * target * 0.75, 4.0 / 3.0 * target);
     r.flip_edges();
     const geometry::TriangleMesh out = r.mesh();
-    if (!wall_search.empty()) {
-      // Splits add vertices and collapses move them (to a midpoint); every other vertex keeps
-      // its position bit for bit, and with it its last search.
-      const auto& old = particles.positions();
-      std::unordered_map<PositionKey, std::int32_t, PositionKeyHash> at;
-      at.reserve(old.size());
-      for (std::size_t i = 0; i < old.size(); ++i) at.emplace(position_key(old[i]), static_cast<std::int32_t>(i));
-      std::vector<WallSearch> kept(out.vertices.size());
-      for (std::size_t i = 0; i < kept.size(); ++i)
-        if (const auto it = at.find(position_key(out.vertices[i])); it != at.end())
-          kept[i] = wall_search[std::size_t(it->second)];
+    // Splits add vertices and collapses move them (to a midpoint); every other vertex keeps
+    // its position bit for bit, and with it its last search, its quiet count and its dirty flag
+    // (set too where an operation changed one of its triangles).
+    const std::vector<std::int32_t> from =
+        !dirty.empty() || !wall_search.empty() || sleeping ? r.input_index() : std::vector<std::int32_t>{};
+    if (!dirty.empty()) {
+      const std::vector<std::uint8_t> touched = r.touched();
+      std::vector<std::uint8_t> d(out.vertices.size());
+      for (std::size_t i = 0; i < d.size(); ++i) d[i] = from[i] < 0 || touched[i] || dirty[std::size_t(from[i])] ? 1 : 0;
+      dirty = std::move(d);
+    }
+    if (!wall_search.empty() || sleeping) {
+      std::vector<WallSearch> kept(wall_search.empty() ? 0 : out.vertices.size());
+      std::vector<std::uint8_t> kept_quiet(sleeping ? out.vertices.size() : 0, 0);
+      for (std::size_t i = 0; i < out.vertices.size(); ++i)
+        if (from[i] >= 0) {
+          if (!kept.empty()) kept[i] = wall_search[std::size_t(from[i])];
+          if (sleeping) kept_quiet[i] = quiet[std::size_t(from[i])];
+        }
       wall_search = std::move(kept);
+      quiet = std::move(kept_quiet);
     }
     set_mesh(out, r.locked());
   }
@@ -241,17 +249,39 @@ struct Balloon::State {
     if (repaired.triangles.empty()) return;  // keep the old surface rather than lose it
     set_mesh(repaired, {});
     if (!wall_search.empty()) wall_search.assign(particles.size(), WallSearch{});
+    quiet.assign(particles.size(), 0);
+    dirty.clear();
     ++report.repairs;
   }
-  // The intersecting triangle pairs of the present surface (timed as a phase).
-  std::vector<std::pair<std::int32_t, std::int32_t>> intersecting_pairs() {
+  // The intersecting triangle pairs of the present surface (timed as a phase). Incremental:
+  // only the triangles with a dirty corner are tested against the others while fewer than half
+  // are, and a search that finds none marks every vertex clean.
+  std::vector<std::pair<std::int32_t, std::int32_t>> intersecting_pairs(bool incremental = true) {
     const PhaseTimer timer(report.phase_seconds.intersections);
-    return geometry::self_intersections(mesh(), {.threaded = opt.threaded});
+    const geometry::TriangleMesh m = mesh();
+    std::vector<std::pair<std::int32_t, std::int32_t>> pairs;
+    std::vector<std::uint8_t> changed;
+    if (incremental && dirty.size() == particles.size()) {
+      changed.resize(triangles.size());
+      std::size_t count = 0;
+      for (std::size_t t = 0; t < triangles.size(); ++t) {
+        const Tri& tr = triangles[t];
+        changed[t] = dirty[std::size_t(tr[0])] | dirty[std::size_t(tr[1])] | dirty[std::size_t(tr[2])];
+        count += changed[t];
+      }
+      if (2 * count >= triangles.size()) changed.clear();
+    }
+    pairs = changed.empty() ? geometry::self_intersections(m, {.threaded = opt.threaded})
+                            : geometry::self_intersections_touching(m, changed, {.threaded = opt.threaded});
+    if (pairs.empty()) dirty.assign(particles.size(), 0);
+    return pairs;
   }
-  // Handles intersections: freeze the vertices involved, then rebuild the surface.
+  // Handles intersections: a local fold is untangled where it is; otherwise freeze the
+  // vertices involved, then rebuild the surface.
   void handle_intersections() {
     const auto pairs = intersecting_pairs();
     if (pairs.empty()) return;
+    if (untangle_folds(pairs)) return;
     for (const auto& [a, b] : pairs)
       for (std::int32_t t : {a, b})
         for (std::int32_t v : triangles[t])
@@ -261,11 +291,54 @@ struct Balloon::State {
           }
     repair(pairs, true);
   }
+  // A local fold is smoothed out in place (untangle_folds); the vertices it moved are awake
+  // and searched again in the edge stage.
+  bool untangle_folds(const std::vector<std::pair<std::int32_t, std::int32_t>>& pairs) {
+    if (opt.fold_rings <= 0) return false;
+    const PhaseTimer timer(report.phase_seconds.repair);
+    geometry::TriangleMesh m = mesh();
+    std::vector<std::uint8_t> fixed = locked_flags();
+    const auto moved = segment::untangle_folds(m, pairs, fixed, {.rings = opt.fold_rings, .rounds = opt.fold_rounds});
+    if (!moved) return false;
+    particles.positions() = std::move(m.vertices);
+    // The region no longer meets anything (untangle_folds checked it) and the rest is as the
+    // search found it; the region's corners moved.
+    dirty.assign(particles.size(), 0);
+    for (std::int32_t v : *moved) {
+      dirty[std::size_t(v)] = 1;
+      if (std::size_t(v) < quiet.size()) quiet[std::size_t(v)] = 0;
+      if (std::size_t(v) < wall_search.size()) wall_search[std::size_t(v)].valid = false;
+    }
+    ++report.local_repairs;
+    return true;
+  }
+  // The quiet counts after a step to @p next: a vertex that moved more than sleep_move_voxels,
+  // and every vertex of its triangles, starts again from 0; the others count one more step.
+  void update_quiet(const std::vector<Vec3>& next) {
+    const auto& x = particles.positions();
+    const std::size_t n = x.size();
+    if (quiet.size() != n) quiet.assign(n, 0);
+    const double eps2 = std::pow(opt.sleep_move_voxels * h, 2);
+    std::vector<std::uint8_t> loud(n, 0);
+    for (std::size_t i = 0; i < n; ++i) {
+      loud[i] = (next[i] - x[i]).squaredNorm() > eps2 ? 1 : 0;
+      quiet[i] = loud[i] ? 0 : std::uint8_t(std::min(int(quiet[i]) + 1, 255));
+    }
+    for (const Tri& t : triangles)
+      if (loud[std::size_t(t[0])] || loud[std::size_t(t[1])] || loud[std::size_t(t[2])])
+        for (std::int32_t w : t) quiet[std::size_t(w)] = 0;
+  }
   // One explicit step of the first-order dynamics. edge_stage switches the intensity
   // inflation for the edge attraction where a wall is within reach.
   void move(bool edge_stage) {
     const PhaseTimer timer(report.phase_seconds.move);
-    const auto d = surface_differentials(particles.positions(), triangles);
+    // Sleeping vertices use no differentials: only the triangles of awake ones are read.
+    std::vector<std::uint8_t> awake;
+    if (!edge_stage && opt.sleep_steps > 0 && quiet.size() == particles.size()) {
+      awake.resize(particles.size());
+      for (std::size_t i = 0; i < awake.size(); ++i) awake[i] = asleep(i) ? 0 : 1;
+    }
+    const auto d = surface_differentials(particles.positions(), triangles, awake);
     auto& x = particles.positions();
     auto& v = particles.velocities();
     const std::size_t n = x.size();
@@ -317,7 +390,7 @@ struct Balloon::State {
     parallel_for(
         n,
         [&](std::size_t i) {
-          if (particles.fixed(i)) return;
+          if (particles.fixed(i) || asleep(i)) return;
           const Vec3& nrm = d.normals[i];
           if (!inside_roi(x[i])) {
             normal_mm[i] = -step;
@@ -435,8 +508,9 @@ struct Balloon::State {
     parallel_for(
         n,
         [&](std::size_t i) {
-          if (particles.fixed(i)) {
+          if (particles.fixed(i) || asleep(i)) {
             next[i] = x[i];
+            if (!particles.fixed(i)) v[i] = Vec3::Zero();
             return;
           }
           const Vec3& nrm = d.normals[i];
@@ -453,6 +527,15 @@ struct Balloon::State {
           v[i] = delta;
         },
         opt.threaded, 512);
+    if (!edge_stage)
+      for (std::size_t i = 0; i < n; ++i) {
+        if (particles.fixed(i)) continue;
+        ++(asleep(i) ? report.slept_vertex_steps : report.inflation_vertex_steps);
+      }
+    if (!edge_stage && opt.sleep_steps > 0) update_quiet(next);
+    if (!dirty.empty())
+      for (std::size_t i = 0; i < n; ++i)
+        if (next[i] != x[i]) dirty[i] = 1;
     x = std::move(next);
     if (edge_stage)
       for (std::size_t i = 0; i < n; ++i) {
@@ -473,6 +556,8 @@ Balloon::Balloon(const image::Volume<float>& ct, const std::vector<Vec3>& seeds_
     throw InvalidInput("balloon: step_voxels must be in (0, 1]");
   if (!(options.edge_length_voxels > 0) || !(options.seed_radius_voxels > 0))
     throw InvalidInput("balloon: edge length and seed radius must be positive");
+  if (options.sleep_steps < 0 || options.sleep_steps > 255 || !(options.sleep_move_voxels >= 0))
+    throw InvalidInput("balloon: sleep_steps must be in [0, 255] and sleep_move_voxels non-negative");
   if (options.roi_mm && ((*options.roi_mm)[0].array() >= (*options.roi_mm)[1].array()).any())
     throw InvalidInput("balloon: the region of interest must have min < max on every axis");
   m->opt = options;
@@ -572,6 +657,7 @@ BalloonResult Balloon::run(Progress* progress) {
   while (!step()) {
     if (s.iteration % 50 == 0) report(progress, std::min(0.9, double(s.iteration) / s.opt.max_iterations), "inflating");
   }
+  s.inflating = false;
   // Thaw frozen vertices for the edge stage.
   for (std::size_t i = 0; i < s.particles.size(); ++i) s.particles.set_fixed(i, false);
   if (s.opt.edge_refinement) {
@@ -590,13 +676,13 @@ BalloonResult Balloon::run(Progress* progress) {
   }
   // Final guarantee: no self-intersection. A repair without remeshing gives the zero level
   // of a signed distance, which cannot intersect itself.
-  auto pairs = s.intersecting_pairs();
+  auto pairs = s.intersecting_pairs(false);
   if (!pairs.empty()) {
     s.repair(pairs, true);
-    pairs = s.intersecting_pairs();
+    pairs = s.intersecting_pairs(false);
     if (!pairs.empty()) {
       s.repair(pairs, false);
-      pairs = s.intersecting_pairs();
+      pairs = s.intersecting_pairs(false);
     }
   }
   BalloonResult out;

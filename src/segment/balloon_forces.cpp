@@ -9,14 +9,17 @@
 
 namespace ido::segment {
 
-SurfaceDifferentials surface_differentials(const std::vector<Vec3>& x, const std::vector<Tri>& triangles) {
+SurfaceDifferentials surface_differentials(const std::vector<Vec3>& x, const std::vector<Tri>& triangles,
+                                           const std::vector<std::uint8_t>& needed) {
   SurfaceDifferentials d;
   const std::size_t n = x.size();
   d.normals.assign(n, Vec3::Zero());
   d.umbrella_mm.assign(n, Vec3::Zero());
   d.mean_edge2_mm2.assign(n, 0.0);
   std::vector<int> count(n, 0);
+  const bool all = needed.size() != n;
   for (const Tri& t : triangles) {
+    if (!all && !needed[std::size_t(t[0])] && !needed[std::size_t(t[1])] && !needed[std::size_t(t[2])]) continue;
     const Vec3 an = (x[t[1]] - x[t[0]]).cross(x[t[2]] - x[t[0]]);
     for (int k = 0; k < 3; ++k) {
       const std::int32_t v = t[k], w = t[(k + 1) % 3];

@@ -1,15 +1,18 @@
 // SPDX-License-Identifier: Apache-2.0
 // The balloon's topology repair: signed distance from the non-intersecting faces, its zero
-// level by the project's marching cubes, remeshed. Written by hand for ido.
+// level by the project's marching cubes, remeshed; and the local repair of folds. Written by
+// hand for ido.
 #include "ido/segment/topology_repair.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numeric>
 #include <unordered_map>
 
 #include "ido/core/error.h"
 #include "ido/core/parallel.h"
+#include "ido/geometry/self_intersection.h"
 #include "ido/meshing/marching_cubes.h"
 #include "ido/meshing/remesh.h"
 #include "ido/meshing/signed_distance.h"
@@ -92,6 +95,124 @@ geometry::TriangleMesh repair_topology(
   ro.target_edge_mm = options.target_edge_mm;
   ro.iterations = 3;
   return meshing::remesh(level, ro);
+}
+
+namespace {
+
+// Whether a triangle with a corner in @p region meets any other triangle of @p m (exact test;
+// boxes first).
+bool region_intersects(const geometry::TriangleMesh& m, const std::vector<std::uint8_t>& region) {
+  std::vector<std::int32_t> inner;
+  Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
+  std::vector<std::array<Vec3, 2>> box(m.triangles.size());
+  for (std::size_t t = 0; t < m.triangles.size(); ++t) {
+    const Tri& tr = m.triangles[t];
+    const Vec3 &a = m.vertices[std::size_t(tr[0])], &b = m.vertices[std::size_t(tr[1])], &c = m.vertices[std::size_t(tr[2])];
+    box[t] = {a.cwiseMin(b).cwiseMin(c), a.cwiseMax(b).cwiseMax(c)};
+    if (region[std::size_t(tr[0])] || region[std::size_t(tr[1])] || region[std::size_t(tr[2])]) {
+      inner.push_back(std::int32_t(t));
+      lo = lo.cwiseMin(box[t][0]);
+      hi = hi.cwiseMax(box[t][1]);
+    }
+  }
+  auto overlap = [](const std::array<Vec3, 2>& p, const std::array<Vec3, 2>& q) {
+    return (p[0].array() <= q[1].array()).all() && (q[0].array() <= p[1].array()).all();
+  };
+  std::vector<std::int32_t> near;
+  for (std::size_t t = 0; t < box.size(); ++t)
+    if (overlap(box[t], {lo, hi})) near.push_back(std::int32_t(t));
+  for (std::int32_t t : inner)
+    for (std::int32_t u : near)
+      if (u != t && overlap(box[std::size_t(t)], box[std::size_t(u)]) && geometry::mesh_triangles_intersect(m, t, u))
+        return true;
+  return false;
+}
+
+}  // namespace
+
+std::optional<std::vector<std::int32_t>> untangle_folds(
+    geometry::TriangleMesh& mesh, const std::vector<std::pair<std::int32_t, std::int32_t>>& intersecting_pairs,
+    const std::vector<std::uint8_t>& fixed, const FoldRepairOptions& options) {
+  const std::size_t n = mesh.vertices.size();
+  if (intersecting_pairs.empty() || options.rings < 0 || options.rounds <= 0) return std::nullopt;
+  if (!fixed.empty() && fixed.size() != n)
+    throw InvalidInput("untangle folds: fixed flags must be empty or one per vertex");
+  // Vertex → neighbours (CSR): each triangle a→b gives a its neighbour b; on a closed
+  // manifold every neighbour appears exactly once.
+  std::vector<std::int32_t> first(n + 1, 0), nb(3 * mesh.triangles.size());
+  for (const Tri& t : mesh.triangles)
+    for (std::int32_t v : t) ++first[std::size_t(v) + 1];
+  for (std::size_t i = 0; i < n; ++i) first[i + 1] += first[i];
+  {
+    std::vector<std::int32_t> at(first.begin(), first.end() - 1);
+    for (const Tri& t : mesh.triangles)
+      for (int k = 0; k < 3; ++k) nb[std::size_t(at[std::size_t(t[k])]++)] = t[(k + 1) % 3];
+  }
+  // Every pair must be a fold: breadth-first from one triangle's corners, options.rings deep,
+  // meets a corner of the other.
+  std::vector<std::uint32_t> mark(n, 0);
+  std::uint32_t stamp = 0;
+  std::vector<std::int32_t> ring, next_ring;
+  for (const auto& [a, b] : intersecting_pairs) {
+    ++stamp;
+    ring.assign(mesh.triangles[std::size_t(a)].begin(), mesh.triangles[std::size_t(a)].end());
+    for (std::int32_t v : ring) mark[std::size_t(v)] = stamp;
+    for (int r = 0; r < options.rings; ++r) {
+      next_ring.clear();
+      for (std::int32_t v : ring)
+        for (std::int32_t q = first[std::size_t(v)]; q < first[std::size_t(v) + 1]; ++q)
+          if (const std::int32_t w = nb[std::size_t(q)]; mark[std::size_t(w)] != stamp) {
+            mark[std::size_t(w)] = stamp;
+            next_ring.push_back(w);
+          }
+      ring.swap(next_ring);
+    }
+    const Tri& tb = mesh.triangles[std::size_t(b)];
+    if (mark[std::size_t(tb[0])] != stamp && mark[std::size_t(tb[1])] != stamp && mark[std::size_t(tb[2])] != stamp)
+      return std::nullopt;
+  }
+  // The region: the intersecting triangles' corners and their one-ring.
+  std::vector<std::uint8_t> in_region(n, 0);
+  std::vector<std::int32_t> region;
+  auto add = [&](std::int32_t v) {
+    if (!in_region[std::size_t(v)]) {
+      in_region[std::size_t(v)] = 1;
+      region.push_back(v);
+    }
+  };
+  for (const auto& [a, b] : intersecting_pairs)
+    for (std::int32_t t : {a, b})
+      for (std::int32_t v : mesh.triangles[std::size_t(t)]) add(v);
+  auto grow = [&] {
+    const std::size_t m = region.size();
+    for (std::size_t r = 0; r < m; ++r)
+      for (std::int32_t q = first[std::size_t(region[r])]; q < first[std::size_t(region[r]) + 1]; ++q)
+        add(nb[std::size_t(q)]);
+  };
+  grow();
+  geometry::TriangleMesh work = mesh;
+  std::vector<Vec3> moved;
+  for (int round = 0; round < options.rounds; ++round) {
+    for (int pass = 0; pass < 2; ++pass) {
+      moved.resize(region.size());
+      for (std::size_t r = 0; r < region.size(); ++r) {
+        const auto v = std::size_t(region[r]);
+        moved[r] = work.vertices[v];
+        if ((!fixed.empty() && fixed[v]) || first[v + 1] == first[v]) continue;
+        Vec3 c = Vec3::Zero();
+        for (std::int32_t q = first[v]; q < first[v + 1]; ++q) c += work.vertices[std::size_t(nb[std::size_t(q)])];
+        c /= double(first[v + 1] - first[v]);
+        moved[r] = 0.5 * (work.vertices[v] + c);
+      }
+      for (std::size_t r = 0; r < region.size(); ++r) work.vertices[std::size_t(region[r])] = moved[r];
+    }
+    if (!region_intersects(work, in_region)) {
+      mesh.vertices = std::move(work.vertices);
+      return region;
+    }
+    grow();
+  }
+  return std::nullopt;
 }
 
 }  // namespace ido::segment

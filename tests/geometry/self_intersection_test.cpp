@@ -7,6 +7,7 @@
 #include <cmath>
 #include <random>
 
+#include "ido/core/error.h"
 #include "ido/geometry/primitives.h"
 #include "test_meshes.h"
 
@@ -237,6 +238,63 @@ TEST(SelfIntersection, ThreadedBlocksFindTheSerialPairs) {
     EXPECT_EQ(self_intersections(*m, {.threaded = true}), serial);
     EXPECT_TRUE(has_self_intersections(*m, {.threaded = true}));
   }
+}
+
+/// The pairs of @p all with at least one triangle flagged in @p changed.
+Pairs touching(const Pairs& all, const std::vector<std::uint8_t>& changed) {
+  Pairs out;
+  for (const auto& p : all)
+    if (changed[static_cast<std::size_t>(p.first)] || changed[static_cast<std::size_t>(p.second)]) out.push_back(p);
+  return out;
+}
+
+// The incremental search returns exactly the brute force's pairs that have a flagged triangle,
+// on folded, adversarial (coplanar, touching, shared edges) and shuffled meshes, with few, half
+// or all triangles flagged, on one and several threads; a pair of two flagged triangles once.
+TEST(SelfIntersection, TouchingSearchEqualsTheFlaggedPairsOfTheBruteForce) {
+  std::mt19937 rng(17);
+  std::uniform_int_distribution<int> h(-1, 1);
+  TriangleMesh adversarial = lattice_grid(12, [&](int, int) { return double(h(rng)); });
+  std::uniform_int_distribution<int> pick(0, static_cast<int>(adversarial.vertices.size()) - 1);
+  for (int k = 0; k < 20; ++k) {
+    Vec3& v = adversarial.vertices[static_cast<std::size_t>(pick(rng))];
+    v.x() += h(rng) * 1.5;
+    v.y() += h(rng) * 1.5;
+  }
+  const std::vector<TriangleMesh> meshes = {
+      test::jittered(icosphere(Vec3::Zero(), 1.0, 3), 0.12, 1), adversarial,
+      shuffled(test::jittered(icosphere(Vec3::Zero(), 1.0, 3), 0.08, 2), 4),
+      test::merged(icosphere(Vec3(0, 0, 0), 1.0, 2), icosphere(Vec3(1, 0.1, 0), 1.0, 2))};
+  for (const TriangleMesh& m : meshes) {
+    const Pairs all = brute_force(m);
+    ASSERT_FALSE(all.empty());
+    for (const double share : {0.02, 0.5, 1.0}) {
+      std::bernoulli_distribution flag(share);
+      std::vector<std::uint8_t> changed(m.triangles.size());
+      for (auto& c : changed) c = flag(rng) ? 1 : 0;
+      const Pairs want = touching(all, changed);
+      EXPECT_EQ(self_intersections_touching(m, changed, {.threaded = false}), want) << share;
+      EXPECT_EQ(self_intersections_touching(m, changed, {.threaded = true}), want) << share;
+    }
+    EXPECT_TRUE(self_intersections_touching(m, std::vector<std::uint8_t>(m.triangles.size(), 0)).empty());
+  }
+  EXPECT_THROW((void)self_intersections_touching(meshes[0], {1, 0}), InvalidInput);
+}
+
+// A clean surface that then moves in one place: flagging the triangles of the moved vertices
+// finds every pair the whole search finds.
+TEST(SelfIntersection, TouchingSearchAfterALocalMoveEqualsTheWholeSearch) {
+  TriangleMesh m = torus_surface(Vec3::Zero(), 3, 1, 48, 24);
+  ASSERT_TRUE(self_intersections(m).empty());
+  Vec3& dragged = m.vertices[1000];
+  const Vec3 centre_line = 3.0 * Vec3(dragged.x(), dragged.y(), 0.0).normalized();
+  dragged -= 2.3 * (dragged - centre_line).normalized();  // a spike through the tube's far wall
+  std::vector<std::uint8_t> changed(m.triangles.size(), 0);
+  for (std::size_t t = 0; t < m.triangles.size(); ++t)
+    for (std::int32_t v : m.triangles[t]) changed[t] |= v == 1000 ? 1 : 0;
+  const Pairs whole = self_intersections(m);
+  ASSERT_FALSE(whole.empty());
+  EXPECT_EQ(self_intersections_touching(m, changed), whole);
 }
 
 TEST(SelfIntersection, EmptyAndSingle) {

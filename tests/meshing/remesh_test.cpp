@@ -2,6 +2,7 @@
 #include "ido/meshing/remesh.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <string>
 #include <map>
@@ -190,6 +191,75 @@ TEST(SurfaceRemesher, LockedVerticesStayPut) {
   }
   EXPECT_EQ(found, expected);
   EXPECT_TRUE(facts(out).closed_oriented);
+}
+
+// Restricted to the active vertices (the upper cap of a sphere whose edges are all out of
+// range), the remesher leaves every edge between two inactive vertices as it was; input_index
+// names the input vertex of every output vertex left at its input position (bit for bit), and
+// every output triangle that is not an input triangle has a touched corner.
+TEST(SurfaceRemesher, ActiveVerticesBoundTheChangesAndTheirTraceIsExact) {
+  const auto m = sphere(10.0, 3);  // edges ≈ 1.6–2.6 mm
+  std::vector<std::uint8_t> active(m.vertices.size());
+  for (std::size_t v = 0; v < active.size(); ++v) active[v] = m.vertices[v].z() > 4.0 ? 1 : 0;
+  std::set<std::pair<int, int>> input_edges;
+  std::set<std::array<int, 3>> input_triangles;  // rotated so the smallest index comes first
+  auto canonical = [](std::array<int, 3> t) {
+    std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
+    return t;
+  };
+  for (const Tri& t : m.triangles) {
+    input_triangles.insert(canonical({t[0], t[1], t[2]}));
+    for (int k = 0; k < 3; ++k) input_edges.insert(std::minmax(t[k], t[(k + 1) % 3]));
+  }
+  std::size_t kept_restricted = 0, kept_unrestricted = 0;  // inactive input edges left in place
+  for (const bool restricted : {true, false}) {
+    SurfaceRemesher r(m);
+    if (restricted) r.set_active(active);
+    const std::int64_t ops = r.split_long_edges(2.0) + r.collapse_short_edges(1.9, 3.0) + r.flip_edges();
+    const auto out = r.mesh();
+    expect_closed_manifold(facts(out), 2);
+    const std::vector<std::int32_t> from = r.input_index();
+    const std::vector<std::uint8_t> touched = r.touched();
+    ASSERT_EQ(from.size(), out.vertices.size());
+    ASSERT_EQ(touched.size(), out.vertices.size());
+    std::set<std::pair<int, int>> output_edges;  // in input numbering, between kept vertices
+    std::vector<std::uint8_t> kept(m.vertices.size(), 0);
+    for (const Tri& t : out.triangles) {
+      const std::array<int, 3> src{from[t[0]], from[t[1]], from[t[2]]};
+      const bool all_input = src[0] >= 0 && src[1] >= 0 && src[2] >= 0;
+      if (!(all_input && input_triangles.count(canonical(src)))) {
+        EXPECT_TRUE(touched[t[0]] || touched[t[1]] || touched[t[2]]);
+      }
+      for (int k = 0; k < 3; ++k) {
+        const int a = src[k], b = src[(k + 1) % 3];
+        if (a < 0 || b < 0) continue;
+        kept[a] = kept[b] = 1;
+        output_edges.insert(std::minmax(a, b));
+        if (!active[a] && !active[b]) {
+          EXPECT_TRUE(input_edges.count(std::minmax(a, b))) << a << "-" << b;
+        }
+      }
+    }
+    for (std::size_t v = 0; v < out.vertices.size(); ++v) {
+      if (from[v] >= 0) {
+        EXPECT_EQ(out.vertices[v], m.vertices[std::size_t(from[v])]);
+      }
+    }
+    // Input edges between two inactive vertices that are both still there: none lost.
+    std::size_t inactive_edges = 0, lost = 0;
+    for (const auto& [a, b] : input_edges)
+      if (!active[a] && !active[b] && kept[a] && kept[b]) {
+        ++inactive_edges;
+        lost += output_edges.count({a, b}) ? 0 : 1;
+      }
+    EXPECT_GT(ops, 50);
+    EXPECT_EQ(lost, 0u) << restricted;  // (unrestricted: nothing there is left untouched)
+    (restricted ? kept_restricted : kept_unrestricted) = inactive_edges;
+  }
+  EXPECT_GT(kept_restricted, 200u);
+  EXPECT_LT(kept_unrestricted, kept_restricted / 4);
+  SurfaceRemesher r(m);
+  EXPECT_THROW(r.set_active({1, 0}), InvalidInput);
 }
 
 TEST(SurfaceRemesher, RejectsOpenMesh) {

@@ -47,6 +47,10 @@ TEST_P(PhantomAccuracy, DiceEulerAndValidSurface) {
               static_cast<long long>(r.report.euler_characteristic), p.truth_euler_characteristic,
               static_cast<long long>(r.report.vertices), static_cast<long long>(r.report.iterations), r.report.seconds,
               static_cast<long long>(r.report.repairs), r.report.leak_warning ? " LEAK" : "");
+  std::printf("%-18s %-5s local repairs %lld, vertex steps %lld moved / %lld asleep\n",
+              std::string(phantom_kind_name(c.kind)).c_str(), c.anisotropic ? "aniso" : "iso",
+              static_cast<long long>(r.report.local_repairs), static_cast<long long>(r.report.inflation_vertex_steps),
+              static_cast<long long>(r.report.slept_vertex_steps));
   // Validity and topology are required of every case.
   EXPECT_TRUE(r.report.closed);
   EXPECT_TRUE(r.report.manifold);
@@ -80,6 +84,38 @@ TEST(BoneAccuracy, LowNoiseStillClosesThePosteriorArch) {
     EXPECT_EQ(r.report.euler_characteristic, p.truth_euler_characteristic) << spacing << " mm";
     EXPECT_EQ(r.report.self_intersections, 0);
   }
+}
+
+// The active front (BalloonOptions::sleep_steps) skips the settled part of the surface: on
+// the vessel tree, whose ends travel long after its trunk has settled, at least half of the
+// vertex updates while inflating are skipped, and the result is as accurate as updating every
+// vertex every step (same Euler number, Dice within 0.005, both ≥ 0.97).
+TEST(ActiveFront, SkipsTheSettledSurfaceWithoutLosingAccuracy) {
+  PhantomOptions po;
+  po.blur_voxels = 0.7;
+  po.seed = 11;
+  po.noise_hu = 0.2 * make_phantom(PhantomKind::VesselTree, po).contrast_hu;
+  const Phantom p = make_phantom(PhantomKind::VesselTree, po);
+  double dice[2] = {0, 0};
+  for (const int sleep : {0, 10}) {
+    BalloonOptions bo;
+    bo.sleep_steps = sleep;
+    const BalloonResult r = segment_balloon(p.ct_hu, p.seeds_mm, bo);
+    const double d = compare_masks(surface_to_mask(r.surface, p.ct_hu), p.labels).dice;
+    dice[sleep > 0 ? 1 : 0] = d;
+    const auto moved = r.report.inflation_vertex_steps, slept = r.report.slept_vertex_steps;
+    std::printf("vessel tree, sleep_steps %d: dice %.4f, vertex steps %lld moved / %lld asleep\n", sleep, d,
+                static_cast<long long>(moved), static_cast<long long>(slept));
+    EXPECT_GE(d, 0.97) << sleep;
+    EXPECT_EQ(r.report.euler_characteristic, p.truth_euler_characteristic) << sleep;
+    EXPECT_EQ(r.report.self_intersections, 0);
+    if (sleep == 0) {
+      EXPECT_EQ(slept, 0);
+    } else {
+      EXPECT_GE(slept, moved);
+    }
+  }
+  EXPECT_NEAR(dice[1], dice[0], 0.005);
 }
 
 std::vector<Case> all_cases() {

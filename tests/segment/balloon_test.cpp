@@ -487,6 +487,53 @@ void expect_field_equals_full_evaluation(const geometry::TriangleMesh& m, const 
   }
 }
 
+// A vertex dragged past its neighbour folds its fan over the surface (pairs one ring apart):
+// untangle_folds opens it in place, leaving every vertex outside its region bit for bit and
+// the connectivity as it was; the surface is then closed, manifold and free of intersections.
+// A spike pushed through the far side of the sphere meets triangles many rings away: not a fold,
+// so nothing is touched and the caller must rebuild.
+TEST(TopologyRepair, UntanglesAFoldInPlaceAndLeavesContactsToTheRebuild) {
+  const geometry::TriangleMesh sphere = balloon_icosphere(Vec3::Zero(), 10.0, 3);
+  // Vertex 0 and its first neighbour.
+  std::int32_t w = -1;
+  for (const Tri& t : sphere.triangles)
+    for (int k = 0; k < 3; ++k)
+      if (t[k] == 0) w = t[(k + 1) % 3];
+  ASSERT_GE(w, 0);
+  geometry::TriangleMesh folded = sphere;
+  folded.vertices[0] += 1.8 * (sphere.vertices[std::size_t(w)] - sphere.vertices[0]);
+  const auto pairs = geometry::self_intersections(folded);
+  ASSERT_FALSE(pairs.empty());
+  geometry::TriangleMesh fixed_up = folded;
+  const auto region = untangle_folds(fixed_up, pairs, {});
+  ASSERT_TRUE(region.has_value());
+  EXPECT_TRUE(geometry::self_intersections(fixed_up).empty());
+  const auto c = geometry::check_mesh(fixed_up);
+  EXPECT_TRUE(c.closed && c.edge_manifold && c.vertex_manifold && c.oriented);
+  EXPECT_EQ(c.euler_characteristic, 2);
+  EXPECT_EQ(fixed_up.triangles, folded.triangles);
+  std::vector<std::uint8_t> in_region(folded.vertices.size(), 0);
+  for (std::int32_t v : *region) in_region[std::size_t(v)] = 1;
+  EXPECT_LT(region->size(), folded.vertices.size() / 10);
+  for (std::size_t v = 0; v < folded.vertices.size(); ++v)
+    if (!in_region[v]) {
+      EXPECT_EQ(fixed_up.vertices[v], folded.vertices[v]) << v;
+    }
+  // With the dragged vertex's whole neighbourhood fixed, the fold cannot open.
+  std::vector<std::uint8_t> fixed(folded.vertices.size(), 1);
+  geometry::TriangleMesh stuck = folded;
+  EXPECT_FALSE(untangle_folds(stuck, pairs, fixed).has_value());
+  EXPECT_EQ(stuck.vertices, folded.vertices);
+  // A contact: vertex 0 pushed through the sphere and out of its far side.
+  geometry::TriangleMesh spiked = sphere;
+  spiked.vertices[0] *= -1.3;
+  const auto contact = geometry::self_intersections(spiked);
+  ASSERT_FALSE(contact.empty());
+  geometry::TriangleMesh untouched = spiked;
+  EXPECT_FALSE(untangle_folds(untouched, contact, {}).has_value());
+  EXPECT_EQ(untouched.vertices, spiked.vertices);
+}
+
 TEST(TopologyRepair, SignedDistanceFastSignEqualsWindingNumberEverywhere) {
   // Two overlapping spheres: the intersecting triangles are left out of the distance, as the
   // repair does, so grid points near them must still read the winding number directly.

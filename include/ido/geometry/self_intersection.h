@@ -38,6 +38,16 @@ struct SelfIntersectionOptions {
 [[nodiscard]] std::vector<std::pair<std::int32_t, std::int32_t>> self_intersections(
     const TriangleMesh& mesh, const SelfIntersectionOptions& options = {});
 
+/// The pairs of self_intersections(mesh) in which at least one triangle is flagged in
+/// @p changed (one flag per triangle), found without testing two unflagged triangles against
+/// each other: for a surface that moved in places since a search that found nothing (the
+/// balloon's sleeping vertices), flag the triangles with a moved or re-connected corner and
+/// the result equals the whole search. Every triangle is boxed into the grid; only the
+/// flagged ones look for neighbours. Sorted, each pair (i, j) with i < j once.
+/// @throws ido::InvalidInput as self_intersections, or when @p changed has the wrong size.
+[[nodiscard]] std::vector<std::pair<std::int32_t, std::int32_t>> self_intersections_touching(
+    const TriangleMesh& mesh, const std::vector<std::uint8_t>& changed, const SelfIntersectionOptions& options = {});
+
 /// True when self_intersections(mesh) would not be empty; the search stops at the first
 /// intersecting pair it meets, having boxed only the triangles before it (single-threaded)
 /// or within each thread's block of triangles.

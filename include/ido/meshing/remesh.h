@@ -56,11 +56,26 @@ class SurfaceRemesher {
   /// Moves every unlocked vertex by @p weight towards the centroid of its neighbours,
   /// within its tangent plane (area-uniform relaxation).
   void relax_tangentially(double weight);
+  /// Restricts the following split, collapse and flip calls to edges with at least one
+  /// active end (one flag per vertex, in the numbering of the input mesh; empty = every edge),
+  /// and relaxation to active vertices. Vertices created by a split, and the vertex a collapse
+  /// keeps, are active. For a caller that knows which part of the surface moved since the
+  /// last remesh (the balloon's sleeping vertices): edges between two vertices that did not
+  /// move keep the length they had then. @throws ido::InvalidInput on a wrong size.
+  void set_active(std::vector<std::uint8_t> active);
   /// Runs the full schedule of @p options.
   RemeshStats remesh(const RemeshOptions& options);
 
   /// Current mesh, renumbered without deleted vertices and triangles.
   [[nodiscard]] geometry::TriangleMesh mesh() const;
+  /// For each vertex of mesh(): the index it had in the input mesh when it is an input vertex
+  /// at its input position (bit for bit), else −1 (created by a split, or moved by a collapse
+  /// or relaxation). Lets a caller carry per-vertex state through a remesh.
+  [[nodiscard]] std::vector<std::int32_t> input_index() const;
+  /// For each vertex of mesh(): 1 when a split, collapse or flip changed one of its triangles
+  /// (the ends and opposite corners of the edge, the new vertex of a split) or it moved; every
+  /// triangle of mesh() that was not in the input has such a corner.
+  [[nodiscard]] std::vector<std::uint8_t> touched() const;
   /// Locked flags in the numbering of mesh().
   [[nodiscard]] std::vector<std::uint8_t> locked() const;
 
@@ -71,6 +86,10 @@ class SurfaceRemesher {
   std::vector<std::uint8_t> m_vertex_alive;
   std::vector<std::uint8_t> m_triangle_alive;
   std::vector<std::uint8_t> m_locked;
+  std::vector<std::uint8_t> m_active;  // empty = every vertex (see set_active)
+  std::vector<std::uint8_t> m_moved;   // 1 = no longer at its input position (see input_index)
+  std::vector<std::uint8_t> m_touched;  // see touched()
+  std::size_t m_input_vertices = 0;
   std::vector<std::vector<std::int32_t>> m_vertex_triangles;
   std::int64_t m_alive_vertices = 0;
 };

@@ -82,6 +82,22 @@ struct BalloonOptions {
   /// (variance s_a² / 12) and the trilinear sampling (≈ s_a² / 6), s_a the spacing. The half-way level between the profile's extremes
   /// puts a 1.5-mm cortex's wall about half a voxel outward (measured: docs/segmentation.md).
   bool plateau_wall = true;
+  /// Active front while inflating (a narrow band on the surface, as a sparse-field level set
+  /// updates only the band near its front): a vertex that moved less than sleep_move_voxels
+  /// (× h) in each of the last sleep_steps steps, and none of whose one-ring neighbours moved
+  /// more than that meanwhile, sleeps: it keeps its position, is not sampled, and the remesher
+  /// leaves the edges between two sleepers alone. A neighbour that moves wakes it; a topology
+  /// repair wakes every vertex. On a long vessel most of the surface has settled on the wall
+  /// while the two ends still travel. Not used in the edge stage. 0 = every vertex every step.
+  int sleep_steps = 10;
+  double sleep_move_voxels = 0.02;  ///< see sleep_steps (× h)
+  /// Local folds: when every intersecting pair found lies at most fold_rings edges apart on
+  /// the surface (a vertex pushed through its neighbours, not two sheets meeting), the fold is
+  /// smoothed out where it is, in at most fold_rounds rounds (the region growing by a ring each
+  /// round), instead of rebuilding the whole surface; otherwise, or when it does not open, the
+  /// vertices are frozen and the surface rebuilt (repair_topology) as before. 0 = always rebuild.
+  int fold_rings = 2;
+  int fold_rounds = 6;  ///< see fold_rings
   bool threaded = true;                 ///< oneTBB for the per-vertex work
 };
 
@@ -100,8 +116,11 @@ struct BalloonReport {
   std::int64_t vertices = 0, edges = 0, triangles = 0, euler_characteristic = 0, components = 0;
   bool closed = false, manifold = false, oriented = false;
   std::int64_t self_intersections = 0;  ///< of the output (0 by construction)
-  std::int64_t repairs = 0;             ///< topology repairs performed
+  std::int64_t repairs = 0;             ///< topology repairs performed (surface rebuilt)
+  std::int64_t local_repairs = 0;       ///< local folds smoothed out in place (BalloonOptions::fold_rings)
   std::int64_t frozen_vertices = 0;     ///< vertices frozen at intersections (cumulative)
+  std::int64_t inflation_vertex_steps = 0;  ///< vertices moved while inflating (vertex × step)
+  std::int64_t slept_vertex_steps = 0;      ///< vertices left asleep while inflating (vertex × step)
   std::int64_t edge_profile_searches = 0;  ///< edge-stage profile searches (vertex × step)
   std::int64_t edge_profile_reuses = 0;    ///< edge-stage steps where a vertex kept its last wall
   bool converged = false;

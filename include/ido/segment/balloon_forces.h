@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 #include <array>
+#include <cstdint>
 #include <optional>
 #include <vector>
 
@@ -20,9 +21,12 @@ struct SurfaceDifferentials {
 
 /// Computes normals, umbrella vectors and mean squared edge lengths of a closed, oriented
 /// manifold surface in O(V + F). On such a surface each neighbour of i follows i exactly
-/// once in its triangles, which is how the one-ring is gathered.
+/// once in its triangles, which is how the one-ring is gathered. With @p needed (one flag per
+/// vertex) only the triangles with a needed corner are read: the needed vertices' values are
+/// exact, the others' are left partial (the balloon's sleeping vertices do not use theirs).
 [[nodiscard]] SurfaceDifferentials surface_differentials(const std::vector<Vec3>& positions_mm,
-                                                         const std::vector<Tri>& triangles);
+                                                         const std::vector<Tri>& triangles,
+                                                         const std::vector<std::uint8_t>& needed = {});
 
 /// Mean curvature (1/mm) estimated from the umbrella operator: on a sphere of radius R with
 /// edge length ℓ the one-ring centroid lies ℓ²/(2R) inside the vertex, so

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 #include <cstdint>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -33,5 +34,28 @@ struct TopologyRepairOptions {
     const geometry::TriangleMesh& mesh,
     const std::vector<std::pair<std::int32_t, std::int32_t>>& intersecting_pairs,
     const TopologyRepairOptions& options);
+
+/// Tunables of untangle_folds().
+struct FoldRepairOptions {
+  int rings = 2;   ///< a pair is a fold when its triangles lie at most this many edges apart
+  int rounds = 6;  ///< smoothing rounds, the region growing by one ring after each
+};
+
+/// Local repair of folds: self-intersections between triangles at most options.rings edges
+/// apart on the surface (a vertex pushed through its neighbours, as where a deforming front
+/// crumples at a crease), not two distant sheets meeting. When every pair of
+/// @p intersecting_pairs is such a fold, the corners of the intersecting triangles and their
+/// one-ring are moved halfway to their neighbours' centroid (two Laplacian passes per round,
+/// which flattens a fold), the region growing by a ring after each round, until none of the
+/// region's triangles meets any other triangle of the mesh (exact test); vertices flagged in
+/// @p fixed (empty or one per vertex) and every vertex outside the region keep their
+/// positions bit for bit, and the connectivity is unchanged. Returns the moved region's
+/// vertices; std::nullopt, with @p mesh unchanged, when a pair is not a fold or the fold did
+/// not open within options.rounds (then rebuild with repair_topology()). The pairs must be all
+/// those of geometry::self_intersections(mesh) for the result to be free of intersections.
+/// Preconditions: a closed, manifold mesh with valid indices.
+[[nodiscard]] std::optional<std::vector<std::int32_t>> untangle_folds(
+    geometry::TriangleMesh& mesh, const std::vector<std::pair<std::int32_t, std::int32_t>>& intersecting_pairs,
+    const std::vector<std::uint8_t>& fixed, const FoldRepairOptions& options = {});
 
 }  // namespace ido::segment
