@@ -2,6 +2,7 @@
 #include "ido/viz/renderer.h"
 
 #include <GL/osmesa.h>
+#include <dlfcn.h>
 #include <png.h>
 
 #include <algorithm>
@@ -26,6 +27,42 @@ std::mutex& osmesa_mutex() {
   static std::mutex m;
   return m;
 }
+
+// Mesa's OSMesa (with the LLVM it pulls in) is opened on the first render rather than linked:
+// loading it at start-up cost every `ido` command about 0.1 s (relocations and page faults),
+// and most commands never render. The entry points the renderer uses, resolved once.
+#define IDO_OSMESA_FUNCTIONS(X)                                                                          \
+  X(OSMesaCreateContextExt) X(OSMesaDestroyContext) X(OSMesaMakeCurrent) X(OSMesaPixelStore) X(glBegin) \
+  X(glBindTexture) X(glClear) X(glClearColor) X(glClearDepth) X(glColor3f) X(glDeleteTextures)           \
+  X(glDepthFunc) X(glDisable) X(glEnable) X(glEnd) X(glFinish) X(glGenTextures) X(glLineWidth)           \
+  X(glLoadMatrixd) X(glMatrixMode) X(glPixelStorei) X(glPolygonOffset) X(glShadeModel) X(glTexCoord2f)   \
+  X(glTexEnvi) X(glTexImage2D) X(glTexParameteri) X(glVertex3d) X(glVertex3f) X(glViewport)
+
+struct OsMesaApi {
+#define IDO_OSMESA_MEMBER(name) decltype(&::name) name = nullptr;
+  IDO_OSMESA_FUNCTIONS(IDO_OSMESA_MEMBER)
+#undef IDO_OSMESA_MEMBER
+};
+
+/// @throws ido::Error when the library or one of its entry points cannot be found.
+const OsMesaApi& osmesa() {
+  static const OsMesaApi api = [] {
+    constexpr const char* kLibrary = "libOSMesa.so.8";
+    void* lib = dlopen(kLibrary, RTLD_NOW | RTLD_LOCAL);
+    if (!lib)
+      throw Error(std::string("renderer: cannot load ") + kLibrary +
+                  " (Mesa's off-screen OpenGL, Debian package libosmesa6): " + dlerror());
+    OsMesaApi a;
+#define IDO_OSMESA_LOAD(name)                                                                 \
+  a.name = reinterpret_cast<decltype(&::name)>(dlsym(lib, #name));                            \
+  if (!a.name) throw Error(std::string("renderer: ") + kLibrary + " has no entry point " #name);
+    IDO_OSMESA_FUNCTIONS(IDO_OSMESA_LOAD)
+#undef IDO_OSMESA_LOAD
+    return a;
+  }();
+  return api;
+}
+#undef IDO_OSMESA_FUNCTIONS
 
 /// PNG encoding into memory. Kept free of C++ objects with destructors between setjmp and
 /// any longjmp libpng may take on error.
@@ -463,39 +500,40 @@ Image Renderer::render() const {
   image.height = m_height;
   image.rgba.assign(std::size_t(m_width) * std::size_t(m_height) * 4, 0);
 
+  const OsMesaApi& gl = osmesa();
   std::lock_guard<std::mutex> lock(osmesa_mutex());
-  OSMesaContext ctx = OSMesaCreateContextExt(OSMESA_RGBA, 24, 0, 0, nullptr);
+  OSMesaContext ctx = gl.OSMesaCreateContextExt(OSMESA_RGBA, 24, 0, 0, nullptr);
   if (!ctx) throw Error("renderer: OSMesa could not create an off-screen OpenGL context");
   struct ContextGuard {
     OSMesaContext c;
-    ~ContextGuard() { OSMesaDestroyContext(c); }
+    ~ContextGuard() { osmesa().OSMesaDestroyContext(c); }
   } guard{ctx};
-  if (!OSMesaMakeCurrent(ctx, image.rgba.data(), GL_UNSIGNED_BYTE, m_width, m_height))
+  if (!gl.OSMesaMakeCurrent(ctx, image.rgba.data(), GL_UNSIGNED_BYTE, m_width, m_height))
     throw Error("renderer: OSMesa could not bind the picture buffer");
-  OSMesaPixelStore(OSMESA_Y_UP, 0);  // first row of the buffer = top of the picture
+  gl.OSMesaPixelStore(OSMESA_Y_UP, 0);  // first row of the buffer = top of the picture
 
-  glViewport(0, 0, m_width, m_height);
-  glClearColor(float(m_background[0]), float(m_background[1]), float(m_background[2]), 1.0f);
-  glClearDepth(1.0);
-  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-  glEnable(GL_DEPTH_TEST);
-  glDepthFunc(GL_LEQUAL);
-  glDisable(GL_LIGHTING);
-  glDisable(GL_CULL_FACE);
-  glShadeModel(GL_SMOOTH);
-  glMatrixMode(GL_PROJECTION);
-  glLoadMatrixd(proj.data());
-  glMatrixMode(GL_MODELVIEW);
-  glLoadMatrixd(view.data());
+  gl.glViewport(0, 0, m_width, m_height);
+  gl.glClearColor(float(m_background[0]), float(m_background[1]), float(m_background[2]), 1.0f);
+  gl.glClearDepth(1.0);
+  gl.glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  gl.glEnable(GL_DEPTH_TEST);
+  gl.glDepthFunc(GL_LEQUAL);
+  gl.glDisable(GL_LIGHTING);
+  gl.glDisable(GL_CULL_FACE);
+  gl.glShadeModel(GL_SMOOTH);
+  gl.glMatrixMode(GL_PROJECTION);
+  gl.glLoadMatrixd(proj.data());
+  gl.glMatrixMode(GL_MODELVIEW);
+  gl.glLoadMatrixd(view.data());
 
   // Triangles, lit on the CPU by a headlight: ambient + diffuse · |n · l| (two-sided) or
   // max(0, n · l) (one-sided), l pointing from the surface to the eye.
   // Faces are pushed slightly back so that edge lines drawn on them win the depth test.
   if (!m_lines.empty()) {
-    glEnable(GL_POLYGON_OFFSET_FILL);
-    glPolygonOffset(1.0f, 1.0f);
+    gl.glEnable(GL_POLYGON_OFFSET_FILL);
+    gl.glPolygonOffset(1.0f, 1.0f);
   }
-  glBegin(GL_TRIANGLES);
+  gl.glBegin(GL_TRIANGLES);
   for (std::size_t t = 0; t < m_two_sided.size(); ++t) {
     for (int k = 0; k < 3; ++k) {
       const Vertex& v = m_triangles[3 * t + std::size_t(k)];
@@ -505,51 +543,51 @@ Image Renderer::render() const {
       const double lambert = m_two_sided[t] ? std::abs(nl) : std::max(0.0, nl);
       const double shade = kAmbient + kDiffuse * lambert;
       const Eigen::Vector3f c = (v.colour * float(shade)).cwiseMin(1.0f);
-      glColor3f(c[0], c[1], c[2]);
-      glVertex3f(v.position[0], v.position[1], v.position[2]);
+      gl.glColor3f(c[0], c[1], c[2]);
+      gl.glVertex3f(v.position[0], v.position[1], v.position[2]);
     }
   }
-  glEnd();
+  gl.glEnd();
   if (!m_lines.empty()) {
-    glDisable(GL_POLYGON_OFFSET_FILL);
-    glLineWidth(1.0f);
-    glBegin(GL_LINES);
+    gl.glDisable(GL_POLYGON_OFFSET_FILL);
+    gl.glLineWidth(1.0f);
+    gl.glBegin(GL_LINES);
     for (const auto& line : m_lines) {
-      glColor3f(line[2][0], line[2][1], line[2][2]);
-      glVertex3f(line[0][0], line[0][1], line[0][2]);
-      glVertex3f(line[1][0], line[1][1], line[1][2]);
+      gl.glColor3f(line[2][0], line[2][1], line[2][2]);
+      gl.glVertex3f(line[0][0], line[0][1], line[0][2]);
+      gl.glVertex3f(line[1][0], line[1][1], line[1][2]);
     }
-    glEnd();
+    gl.glEnd();
   }
 
   // Slices: unlit textured quads, one texel per voxel.
   if (!m_slices.empty()) {
-    glEnable(GL_TEXTURE_2D);
-    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-    glTexEnvi(GL_TEXTURE_ENV, GL_TEXTURE_ENV_MODE, GL_REPLACE);
+    gl.glEnable(GL_TEXTURE_2D);
+    gl.glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    gl.glTexEnvi(GL_TEXTURE_ENV, GL_TEXTURE_ENV_MODE, GL_REPLACE);
     for (const Slice& s : m_slices) {
       GLuint tex = 0;
-      glGenTextures(1, &tex);
-      glBindTexture(GL_TEXTURE_2D, tex);
-      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-      glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-      glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB, s.tex_w, s.tex_h, 0, GL_RGB, GL_UNSIGNED_BYTE,
+      gl.glGenTextures(1, &tex);
+      gl.glBindTexture(GL_TEXTURE_2D, tex);
+      gl.glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+      gl.glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+      gl.glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+      gl.glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+      gl.glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB, s.tex_w, s.tex_h, 0, GL_RGB, GL_UNSIGNED_BYTE,
                    s.texels.data());
       const float tc[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
-      glBegin(GL_QUADS);
+      gl.glBegin(GL_QUADS);
       for (int k = 0; k < 4; ++k) {
-        glTexCoord2f(tc[k][0], tc[k][1]);
+        gl.glTexCoord2f(tc[k][0], tc[k][1]);
         const Vec3& p = s.corners[std::size_t(k)];
-        glVertex3d(p[0], p[1], p[2]);
+        gl.glVertex3d(p[0], p[1], p[2]);
       }
-      glEnd();
-      glDeleteTextures(1, &tex);
+      gl.glEnd();
+      gl.glDeleteTextures(1, &tex);
     }
-    glDisable(GL_TEXTURE_2D);
+    gl.glDisable(GL_TEXTURE_2D);
   }
-  glFinish();
+  gl.glFinish();
   return image;
 }
 
