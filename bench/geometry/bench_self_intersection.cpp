@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // Self-intersection detection on 102 400-triangle tori: ido against CGAL's Polygon Mesh
-// Processing (self_intersections / does_self_intersect) in one binary, on the same meshes.
+// Processing (self_intersections / does_self_intersect) in one binary, on the same meshes;
+// and ido's incremental search (self_intersections_touching) against its whole search.
 //
 //   build/bench/bench/geometry/bench_self_intersection --benchmark_repetitions=5 \
 //       --benchmark_report_aggregates_only=true
@@ -80,6 +81,32 @@ void BM_ido_self_intersections(benchmark::State& state) {
   }
   state.counters["pairs"] = static_cast<double>(pairs);
   state.counters["triangles"] = static_cast<double>(m.triangles.size());
+}
+
+/// The incremental search (self_intersections_touching) on the folded torus with the
+/// triangles of one end flagged (those whose centroid has the largest x, state.range(2) % of
+/// them: a region that moved, as the balloon's active front), beside the whole search of the
+/// same mesh (BM_ido_self_intersections, mesh 1).
+void BM_ido_self_intersections_touching(benchmark::State& state) {
+  const TriangleMesh& m = test_mesh(1);
+  const bool threaded = state.range(1) != 0;
+  std::vector<std::pair<double, std::size_t>> by_x(m.triangles.size());
+  for (std::size_t t = 0; t < m.triangles.size(); ++t) {
+    const Tri& tr = m.triangles[t];
+    by_x[t] = {m.vertices[std::size_t(tr[0])].x() + m.vertices[std::size_t(tr[1])].x() + m.vertices[std::size_t(tr[2])].x(), t};
+  }
+  std::sort(by_x.begin(), by_x.end());
+  std::vector<std::uint8_t> changed(m.triangles.size(), 0);
+  const std::size_t flagged = m.triangles.size() * static_cast<std::size_t>(state.range(2)) / 100;
+  for (std::size_t k = m.triangles.size() - flagged; k < m.triangles.size(); ++k) changed[by_x[k].second] = 1;
+  std::size_t pairs = 0;
+  for (auto _ : state) {
+    const auto r = self_intersections_touching(m, changed, {.threaded = threaded});
+    pairs = r.size();
+    benchmark::DoNotOptimize(r.data());
+  }
+  state.counters["pairs"] = static_cast<double>(pairs);
+  state.counters["flagged"] = static_cast<double>(flagged);
 }
 
 void BM_ido_has_self_intersections(benchmark::State& state) {
@@ -172,8 +199,20 @@ void register_all() {
 
 }  // namespace
 
+/// The incremental search with 2 % and 10 % of the triangles flagged, next to the whole search.
+void register_touching() {
+  for (int threaded = 0; threaded < 2; ++threaded) {
+    for (int percent : {2, 10}) {
+      auto* b = benchmark::RegisterBenchmark("ido_self_intersections_touching", BM_ido_self_intersections_touching);
+      b->ArgNames({"mesh", "threaded", "percent"})->Args({1, threaded, percent})->Unit(benchmark::kMillisecond)->UseRealTime();
+      if (threaded != 0) b->MeasureProcessCPUTime();
+    }
+  }
+}
+
 int main(int argc, char** argv) {
   register_all();
+  register_touching();
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();

@@ -632,8 +632,9 @@ Pairs find_pairs(const TriangleMesh& mesh, const SelfIntersectionOptions& option
   return bvh.self_pairs(accept, options.threaded);
 }
 
-/// The pairs with at least one flagged triangle, on the grid: every triangle is boxed and
-/// inserted (no visits), then each flagged triangle visits the cells of its box, taking an
+/// The pairs with at least one flagged triangle, on the grid: every triangle is boxed, the
+/// cells the flagged ones cover are marked, and the triangles that reach a marked cell are
+/// inserted (no visits); then each flagged triangle visits the cells of its box, taking an
 /// unflagged neighbour always and a flagged one only when its index is higher (so each pair
 /// once; the owner rule keeps a pair to one cell). Returns false when the grid gives up.
 bool grid_pairs_touching(const TriangleMesh& mesh, const Grid& grid, const std::vector<std::uint8_t>& changed,
@@ -641,15 +642,37 @@ bool grid_pairs_touching(const TriangleMesh& mesh, const Grid& grid, const std::
   const std::size_t n = mesh.triangles.size();
   const auto& vertices = mesh.vertices;
   std::vector<CellBox> boxes(n);
-  CellLists lists(grid, 4 * n);
+  parallel_for(
+      n,
+      [&](std::size_t ts) {
+        const Tri& tri = mesh.triangles[ts];
+        boxes[ts] = cell_box(grid, vertices[static_cast<std::size_t>(tri[0])],
+                             vertices[static_cast<std::size_t>(tri[1])], vertices[static_cast<std::size_t>(tri[2])]);
+      },
+      threaded, 4096);
   std::vector<std::int32_t> flagged;
+  std::vector<std::uint8_t> marked(grid.cells, 0);
   for (std::size_t ts = 0; ts < n; ++ts) {
-    const Tri& tri = mesh.triangles[ts];
-    boxes[ts] = cell_box(grid, vertices[static_cast<std::size_t>(tri[0])], vertices[static_cast<std::size_t>(tri[1])],
-                         vertices[static_cast<std::size_t>(tri[2])]);
-    lists.insert(grid, cell_range(grid, boxes[ts]), static_cast<std::int32_t>(ts));
+    if (!changed[ts]) continue;
+    flagged.push_back(static_cast<std::int32_t>(ts));
+    const CellRange r = cell_range(grid, boxes[ts]);
+    for (std::uint32_t z = r.lo[2]; z <= r.hi[2]; ++z)
+      for (std::uint32_t y = r.lo[1]; y <= r.hi[1]; ++y)
+        for (std::uint32_t x = r.lo[0]; x <= r.hi[0]; ++x) marked[grid.key(x, y, z)] = 1;
+  }
+  auto reaches_marked = [&](const CellRange& r) {
+    for (std::uint32_t z = r.lo[2]; z <= r.hi[2]; ++z)
+      for (std::uint32_t y = r.lo[1]; y <= r.hi[1]; ++y)
+        for (std::uint32_t x = r.lo[0]; x <= r.hi[0]; ++x)
+          if (marked[grid.key(x, y, z)]) return true;
+    return false;
+  };
+  CellLists lists(grid, 4 * flagged.size() + 4096);
+  for (std::size_t ts = 0; ts < n; ++ts) {
+    const CellRange r = cell_range(grid, boxes[ts]);
+    if (!changed[ts] && !reaches_marked(r)) continue;
+    lists.insert(grid, r, static_cast<std::int32_t>(ts));
     if (lists.entries() > entry_budget(n)) return false;
-    if (changed[ts]) flagged.push_back(static_cast<std::int32_t>(ts));
   }
   constexpr std::size_t kChunk = 256;
   const std::size_t chunks = (flagged.size() + kChunk - 1) / kChunk;
@@ -665,8 +688,7 @@ bool grid_pairs_touching(const TriangleMesh& mesh, const Grid& grid, const std::
           const std::int32_t t = flagged[f];
           const auto ts = static_cast<std::size_t>(t);
           candidates.clear();
-          local_visits += lists.visit<false>(grid, boxes, boxes[ts], cell_range(grid, boxes[ts]),
-                                                                     t, candidates);
+          local_visits += lists.visit<false>(grid, boxes, boxes[ts], cell_range(grid, boxes[ts]), t, candidates);
           const Tri& tri = mesh.triangles[ts];
           const Plane pt = plane_of(vertices[static_cast<std::size_t>(tri[0])], vertices[static_cast<std::size_t>(tri[1])],
                                     vertices[static_cast<std::size_t>(tri[2])]);
