@@ -320,6 +320,16 @@ CellRange cell_range(const Grid& grid, const CellBox& b) {
           {grid.cell(b.hi[0], 0), grid.cell(b.hi[1], 1), grid.cell(b.hi[2], 2)}};
 }
 
+/// Calls @p f(key) for every cell of @p r until it returns true; returns whether it did.
+template <class F>
+bool any_cell(const Grid& grid, const CellRange& r, F&& f) {
+  for (std::uint32_t z = r.lo[2]; z <= r.hi[2]; ++z)
+    for (std::uint32_t y = r.lo[1]; y <= r.hi[1]; ++y)
+      for (std::uint32_t x = r.lo[0]; x <= r.hi[0]; ++x)
+        if (f(grid.key(x, y, z))) return true;
+  return false;
+}
+
 /// The owner rule that makes each overlapping pair count once: a pair shares every cell that
 /// both boxes cover, and is taken only in the cell of the lower corner of the boxes'
 /// intersection, max(lower cell of t, lower cell of u) per axis. In a cell (x, y, z) of t, a
@@ -374,13 +384,11 @@ class CellLists {
 
   /// Inserts triangle @p t into every cell of @p r, without visiting the lists.
   void insert(const Grid& grid, const CellRange& r, std::int32_t t) {
-    for (std::uint32_t z = r.lo[2]; z <= r.hi[2]; ++z)
-      for (std::uint32_t y = r.lo[1]; y <= r.hi[1]; ++y)
-        for (std::uint32_t x = r.lo[0]; x <= r.hi[0]; ++x) {
-          std::uint32_t& cell_head = m_head[grid.key(x, y, z)];
-          m_entries.push_back({cell_head, t});
-          cell_head = static_cast<std::uint32_t>(m_entries.size());
-        }
+    any_cell(grid, r, [&](std::size_t key) {
+      m_entries.push_back({m_head[key], t});
+      m_head[key] = static_cast<std::uint32_t>(m_entries.size());
+      return false;
+    });
   }
 
   [[nodiscard]] std::size_t entries() const { return m_entries.size(); }
@@ -655,22 +663,15 @@ bool grid_pairs_touching(const TriangleMesh& mesh, const Grid& grid, const std::
   for (std::size_t ts = 0; ts < n; ++ts) {
     if (!changed[ts]) continue;
     flagged.push_back(static_cast<std::int32_t>(ts));
-    const CellRange r = cell_range(grid, boxes[ts]);
-    for (std::uint32_t z = r.lo[2]; z <= r.hi[2]; ++z)
-      for (std::uint32_t y = r.lo[1]; y <= r.hi[1]; ++y)
-        for (std::uint32_t x = r.lo[0]; x <= r.hi[0]; ++x) marked[grid.key(x, y, z)] = 1;
+    any_cell(grid, cell_range(grid, boxes[ts]), [&](std::size_t key) {
+      marked[key] = 1;
+      return false;
+    });
   }
-  auto reaches_marked = [&](const CellRange& r) {
-    for (std::uint32_t z = r.lo[2]; z <= r.hi[2]; ++z)
-      for (std::uint32_t y = r.lo[1]; y <= r.hi[1]; ++y)
-        for (std::uint32_t x = r.lo[0]; x <= r.hi[0]; ++x)
-          if (marked[grid.key(x, y, z)]) return true;
-    return false;
-  };
   CellLists lists(grid, 4 * flagged.size() + 4096);
   for (std::size_t ts = 0; ts < n; ++ts) {
     const CellRange r = cell_range(grid, boxes[ts]);
-    if (!changed[ts] && !reaches_marked(r)) continue;
+    if (!changed[ts] && !any_cell(grid, r, [&](std::size_t key) { return marked[key] != 0; })) continue;
     lists.insert(grid, r, static_cast<std::int32_t>(ts));
     if (lists.entries() > entry_budget(n)) return false;
   }

@@ -149,6 +149,13 @@ struct Balloon::State {
   bool asleep(std::size_t i) const {
     return inflating && opt.sleep_steps > 0 && i < quiet.size() && quiet[i] >= opt.sleep_steps;
   }
+  // One flag per vertex, 1 = awake, while vertices may sleep; empty (every vertex awake) otherwise.
+  std::vector<std::uint8_t> awake_flags() const {
+    if (!inflating || opt.sleep_steps <= 0 || quiet.size() != particles.size()) return {};
+    std::vector<std::uint8_t> awake(particles.size());
+    for (std::size_t i = 0; i < awake.size(); ++i) awake[i] = asleep(i) ? 0 : 1;
+    return awake;
+  }
 
   // The fitter whose σ is nearest the blur along @p normal: pre-smoothing plus the scanner's
   // blur and the voxel's partial-volume box along each grid axis.
@@ -196,13 +203,10 @@ struct Balloon::State {
   void remesh() {
     const PhaseTimer timer(report.phase_seconds.remesh);
     meshing::SurfaceRemesher r(mesh(), locked_flags());
-    const bool sleeping = inflating && opt.sleep_steps > 0 && quiet.size() == particles.size();
-    if (sleeping) {
-      // Edges between two sleepers have not changed since the last remesh.
-      std::vector<std::uint8_t> active(particles.size());
-      for (std::size_t i = 0; i < active.size(); ++i) active[i] = asleep(i) ? 0 : 1;
-      r.set_active(std::move(active));
-    }
+    // Edges between two sleepers have not changed since the last remesh.
+    std::vector<std::uint8_t> awake = awake_flags();
+    const bool sleeping = !awake.empty();
+    if (sleeping) r.set_active(std::move(awake));
     const double target = opt.edge_length_voxels * h;
     r.split_long_edges(4.0 / 3.0 * target);
     r.collapse_short_edges(0.8 * target * 0.75, 4.0 / 3.0 * target);
@@ -298,7 +302,7 @@ struct Balloon::State {
     const PhaseTimer timer(report.phase_seconds.repair);
     geometry::TriangleMesh m = mesh();
     std::vector<std::uint8_t> fixed = locked_flags();
-    const auto moved = segment::untangle_folds(m, pairs, fixed, {.rings = opt.fold_rings, .rounds = opt.fold_rounds});
+    const auto moved = segment::untangle_folds(m, pairs, fixed, {.rings = opt.fold_rings, .rounds = opt.fold_rounds, .threaded = opt.threaded});
     if (!moved) return false;
     particles.positions() = std::move(m.vertices);
     // The region no longer meets anything (untangle_folds checked it) and the rest is as the
@@ -333,12 +337,7 @@ struct Balloon::State {
   void move(bool edge_stage) {
     const PhaseTimer timer(report.phase_seconds.move);
     // Sleeping vertices use no differentials: only the triangles of awake ones are read.
-    std::vector<std::uint8_t> awake;
-    if (!edge_stage && opt.sleep_steps > 0 && quiet.size() == particles.size()) {
-      awake.resize(particles.size());
-      for (std::size_t i = 0; i < awake.size(); ++i) awake[i] = asleep(i) ? 0 : 1;
-    }
-    const auto d = surface_differentials(particles.positions(), triangles, awake);
+    const auto d = surface_differentials(particles.positions(), triangles, awake_flags());
     auto& x = particles.positions();
     auto& v = particles.velocities();
     const std::size_t n = x.size();

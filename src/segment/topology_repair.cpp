@@ -5,7 +5,6 @@
 #include "ido/segment/topology_repair.h"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <numeric>
 #include <unordered_map>
@@ -97,39 +96,6 @@ geometry::TriangleMesh repair_topology(
   return meshing::remesh(level, ro);
 }
 
-namespace {
-
-// Whether a triangle with a corner in @p region meets any other triangle of @p m (exact test;
-// boxes first).
-bool region_intersects(const geometry::TriangleMesh& m, const std::vector<std::uint8_t>& region) {
-  std::vector<std::int32_t> inner;
-  Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
-  std::vector<std::array<Vec3, 2>> box(m.triangles.size());
-  for (std::size_t t = 0; t < m.triangles.size(); ++t) {
-    const Tri& tr = m.triangles[t];
-    const Vec3 &a = m.vertices[std::size_t(tr[0])], &b = m.vertices[std::size_t(tr[1])], &c = m.vertices[std::size_t(tr[2])];
-    box[t] = {a.cwiseMin(b).cwiseMin(c), a.cwiseMax(b).cwiseMax(c)};
-    if (region[std::size_t(tr[0])] || region[std::size_t(tr[1])] || region[std::size_t(tr[2])]) {
-      inner.push_back(std::int32_t(t));
-      lo = lo.cwiseMin(box[t][0]);
-      hi = hi.cwiseMax(box[t][1]);
-    }
-  }
-  auto overlap = [](const std::array<Vec3, 2>& p, const std::array<Vec3, 2>& q) {
-    return (p[0].array() <= q[1].array()).all() && (q[0].array() <= p[1].array()).all();
-  };
-  std::vector<std::int32_t> near;
-  for (std::size_t t = 0; t < box.size(); ++t)
-    if (overlap(box[t], {lo, hi})) near.push_back(std::int32_t(t));
-  for (std::int32_t t : inner)
-    for (std::int32_t u : near)
-      if (u != t && overlap(box[std::size_t(t)], box[std::size_t(u)]) && geometry::mesh_triangles_intersect(m, t, u))
-        return true;
-  return false;
-}
-
-}  // namespace
-
 std::optional<std::vector<std::int32_t>> untangle_folds(
     geometry::TriangleMesh& mesh, const std::vector<std::pair<std::int32_t, std::int32_t>>& intersecting_pairs,
     const std::vector<std::uint8_t>& fixed, const FoldRepairOptions& options) {
@@ -206,7 +172,13 @@ std::optional<std::vector<std::int32_t>> untangle_folds(
       }
       for (std::size_t r = 0; r < region.size(); ++r) work.vertices[std::size_t(region[r])] = moved[r];
     }
-    if (!region_intersects(work, in_region)) {
+    // The region meets nothing when no triangle with a corner in it intersects any other.
+    std::vector<std::uint8_t> region_triangles(work.triangles.size());
+    for (std::size_t t = 0; t < work.triangles.size(); ++t) {
+      const Tri& tr = work.triangles[t];
+      region_triangles[t] = in_region[std::size_t(tr[0])] | in_region[std::size_t(tr[1])] | in_region[std::size_t(tr[2])];
+    }
+    if (geometry::self_intersections_touching(work, region_triangles, {.threaded = options.threaded}).empty()) {
       mesh.vertices = std::move(work.vertices);
       return region;
     }

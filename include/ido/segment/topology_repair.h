@@ -39,6 +39,7 @@ struct TopologyRepairOptions {
 struct FoldRepairOptions {
   int rings = 2;   ///< a pair is a fold when its triangles lie at most this many edges apart
   int rounds = 6;  ///< smoothing rounds, the region growing by one ring after each
+  bool threaded = true;  ///< oneTBB for the intersection test of the region
 };
 
 /// Local repair of folds: self-intersections between triangles at most options.rings edges
@@ -47,7 +48,8 @@ struct FoldRepairOptions {
 /// @p intersecting_pairs is such a fold, the corners of the intersecting triangles and their
 /// one-ring are moved halfway to their neighbours' centroid (two Laplacian passes per round,
 /// which flattens a fold), the region growing by a ring after each round, until none of the
-/// region's triangles meets any other triangle of the mesh (exact test); vertices flagged in
+/// region's triangles meets any other triangle of the mesh (exact test,
+/// geometry::self_intersections_touching); vertices flagged in
 /// @p fixed (empty or one per vertex) and every vertex outside the region keep their
 /// positions bit for bit, and the connectivity is unchanged. Returns the moved region's
 /// vertices; std::nullopt, with @p mesh unchanged, when a pair is not a fold or the fold did
