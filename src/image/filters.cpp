@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 
 #include "ido/core/error.h"
 #include "ido/core/parallel.h"
@@ -13,35 +14,37 @@
 namespace ido::image {
 namespace {
 
-/// One 1D convolution along @p axis with border replication.
-Volume<float> convolve_axis(const Volume<float>& in, int axis, const std::vector<float>& kernel,
-                            bool threaded) {
-  Volume<float> out = in.like<float>();
-  const std::int64_t nx = in.size(0), ny = in.size(1), nz = in.size(2);
+/// One 1D convolution along @p axis with border replication, from @p src into @p dst (both
+/// nx·ny·nz voxels, not overlapping). Every output voxel is the kernel-weighted sum of its
+/// neighbours along the axis, accumulated from the kernel's first tap to its last; the loops
+/// run along i in the innermost position on every axis so the compiler vectorises them
+/// (the same additions in the same order per voxel, so the same floats as a per-voxel loop).
+void convolve_axis(const float* src, float* dst, const Index3& size, int axis, const std::vector<float>& kernel,
+                   bool threaded) {
+  const std::int64_t nx = size[0], ny = size[1], nz = size[2];
   const int half = static_cast<int>(kernel.size() / 2);
-  const float* src = in.data().data();
-  float* dst = out.data().data();
   const std::size_t rows = static_cast<std::size_t>(ny * nz);
+  const std::size_t row_len = static_cast<std::size_t>(nx);
   if (axis == 0) {
     parallel_for_ranges(
         rows,
         [&](std::size_t b, std::size_t e) {
           std::vector<float> padded(static_cast<std::size_t>(nx + 2 * half));
           for (std::size_t r = b; r < e; ++r) {
-            const float* row = src + r * static_cast<std::size_t>(nx);
+            const float* row = src + r * row_len;
             for (std::int64_t i = -half; i < nx + half; ++i)
               padded[static_cast<std::size_t>(i + half)] = row[std::clamp<std::int64_t>(i, 0, nx - 1)];
-            float* orow = dst + r * static_cast<std::size_t>(nx);
-            for (std::int64_t i = 0; i < nx; ++i) {
-              float acc = 0.f;
-              const float* p = padded.data() + i;
-              for (std::size_t m = 0; m < kernel.size(); ++m) acc += kernel[m] * p[m];
-              orow[i] = acc;
+            float* orow = dst + r * row_len;
+            std::fill(orow, orow + nx, 0.f);
+            for (std::size_t m = 0; m < kernel.size(); ++m) {
+              const float w = kernel[m];
+              const float* p = padded.data() + m;
+              for (std::size_t i = 0; i < row_len; ++i) orow[i] += w * p[i];
             }
           }
         },
         threaded, 16);
-    return out;
+    return;
   }
   // Along j or k every output row is a weighted sum of whole input rows (contiguous in i).
   parallel_for_ranges(
@@ -50,19 +53,18 @@ Volume<float> convolve_axis(const Volume<float>& in, int axis, const std::vector
         for (std::size_t r = b; r < e; ++r) {
           const std::int64_t j = static_cast<std::int64_t>(r) % ny;
           const std::int64_t k = static_cast<std::int64_t>(r) / ny;
-          float* orow = dst + r * static_cast<std::size_t>(nx);
+          float* orow = dst + r * row_len;
           std::fill(orow, orow + nx, 0.f);
           for (int m = -half; m <= half; ++m) {
             const std::int64_t jj = axis == 1 ? std::clamp<std::int64_t>(j + m, 0, ny - 1) : j;
             const std::int64_t kk = axis == 2 ? std::clamp<std::int64_t>(k + m, 0, nz - 1) : k;
             const float w = kernel[static_cast<std::size_t>(m + half)];
-            const float* irow = src + in.linear_index(0, jj, kk);
-            for (std::int64_t i = 0; i < nx; ++i) orow[i] += w * irow[i];
+            const float* irow = src + static_cast<std::size_t>(jj + ny * kk) * row_len;
+            for (std::size_t i = 0; i < row_len; ++i) orow[i] += w * irow[i];
           }
         }
       },
       threaded, 16);
-  return out;
 }
 
 /// Index-space derivative along @p axis at (i, j, k): central, one-sided on the border,
@@ -129,15 +131,29 @@ Volume<float> gaussian_smooth(const Volume<float>& volume, const Vec3& sigma_mm_
   if (!(options.truncate_sigmas >= 1.0))
     throw InvalidInput("gaussian_smooth: truncate_sigmas must be >= 1");
   if (volume.empty()) return volume;
-  Volume<float> cur = volume;
+  // The passes read the input and then ping-pong between two buffers: no copy of the input,
+  // and two fresh volumes whatever the number of passes (each fresh one costs its page faults).
+  std::vector<std::pair<int, std::vector<float>>> passes;
   for (int a = 0; a < 3; ++a) {
     if (volume.size(a) < 2) continue;
     const double sigma_vox = sigma_mm_per_axis[a] / volume.spacing()[a];
     if (sigma_vox < 1e-3) continue;  // kernel is a delta to float precision
-    cur = convolve_axis(cur, a, gaussian_kernel(sigma_vox, options.truncate_sigmas),
-                        options.threaded);
+    passes.emplace_back(a, gaussian_kernel(sigma_vox, options.truncate_sigmas));
   }
-  return cur;
+  if (passes.empty()) return volume;
+  Volume<float> out = volume.like<float>();
+  Volume<float> spare = passes.size() > 1 ? volume.like<float>() : Volume<float>();
+  // With two passes the first goes to the spare buffer, with one or three to the output, so
+  // that the last one lands in the output.
+  Volume<float>* write = passes.size() == 2 ? &spare : &out;
+  Volume<float>* other = passes.size() == 2 ? &out : &spare;
+  const float* read = volume.data().data();
+  for (const auto& [axis, kernel] : passes) {
+    convolve_axis(read, write->data().data(), volume.size(), axis, kernel, options.threaded);
+    read = write->data().data();
+    std::swap(write, other);
+  }
+  return out;
 }
 
 Volume<float> gaussian_smooth(const Volume<float>& volume, double sigma_mm,

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "ido/core/error.h"
@@ -38,14 +40,21 @@ class Volume {
                   const Vec3& origin_mm = Vec3::Zero(), const Mat3& direction = Mat3::Identity(),
                   T fill = T{})
       : m_size(size), m_spacing(spacing_mm), m_origin(origin_mm), m_direction(direction) {
-    for (int a = 0; a < 3; ++a) {
-      if (size[a] < 0) throw InvalidInput("volume size must not be negative");
-      if (!(spacing_mm[a] > 0.0) || !std::isfinite(spacing_mm[a]))
-        throw InvalidInput("volume spacing must be positive and finite");
-    }
-    if (!origin_mm.allFinite()) throw InvalidInput("volume origin must be finite");
-    update_transform();
+    check_grid();
     m_data.assign(static_cast<std::size_t>(size[0] * size[1] * size[2]), fill);
+  }
+
+  /// A volume of @p size voxels that takes over @p voxels (i fastest, then j, then k) without
+  /// copying or first filling them: for a reader that decoded the voxels itself.
+  /// @throws ido::InvalidInput as the constructor above, or when the count is not
+  /// size[0] · size[1] · size[2].
+  Volume(Index3 size, std::vector<T> voxels, const Vec3& spacing_mm, const Vec3& origin_mm, const Mat3& direction)
+      : m_size(size), m_spacing(spacing_mm), m_origin(origin_mm), m_direction(direction) {
+    check_grid();
+    if (voxels.size() != static_cast<std::size_t>(size[0] * size[1] * size[2]))
+      throw InvalidInput("volume of " + std::to_string(size[0]) + "×" + std::to_string(size[1]) + "×" +
+                         std::to_string(size[2]) + " voxels given " + std::to_string(voxels.size()) + " values");
+    m_data = std::move(voxels);
   }
 
   // ---- grid --------------------------------------------------------------------------
@@ -181,6 +190,15 @@ class Volume {
   }
 
  private:
+  void check_grid() {
+    for (int a = 0; a < 3; ++a) {
+      if (m_size[a] < 0) throw InvalidInput("volume size must not be negative");
+      if (!(m_spacing[a] > 0.0) || !std::isfinite(m_spacing[a]))
+        throw InvalidInput("volume spacing must be positive and finite");
+    }
+    if (!m_origin.allFinite()) throw InvalidInput("volume origin must be finite");
+    update_transform();
+  }
   void update_transform() {
     m_index_to_world = m_direction * m_spacing.asDiagonal();
     const double det = m_index_to_world.determinant();

@@ -1,0 +1,55 @@
+// SPDX-License-Identifier: Apache-2.0
+// The process heap policy of ido/core/memory.h. Only glibc's documented mallopt parameters
+// and the kernel's madvise are used; nothing of the allocator is replaced.
+#include "ido/core/memory.h"
+
+#include <cstdint>
+#include <cstdlib>
+
+#if defined(__linux__) && defined(__GLIBC__)
+#include <malloc.h>
+#include <sys/mman.h>
+#include <unistd.h>
+#define IDO_GLIBC_HEAP 1
+#endif
+
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#undef IDO_GLIBC_HEAP
+#endif
+#if defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
+#undef IDO_GLIBC_HEAP
+#endif
+#endif
+
+namespace ido {
+
+HeapPolicy use_huge_page_heap(std::size_t reserve_bytes) {
+  HeapPolicy out;
+#ifdef IDO_GLIBC_HEAP
+  // glibc refuses a mapping threshold above 32 MiB on 64-bit systems (half its arena heap size).
+  if (mallopt(M_MMAP_THRESHOLD, 32 << 20) != 1) return out;
+  mallopt(M_TRIM_THRESHOLD, 1 << 30);
+  // The next extension of the main heap asks for reserve_bytes more than it needs: provoke it
+  // with a small block, then advise the whole extension. Address space only: untouched pages
+  // cost no memory.
+  mallopt(M_TOP_PAD, static_cast<int>(reserve_bytes));
+  const auto* before = static_cast<const char*>(sbrk(0));
+  void* probe = std::malloc(std::size_t(1) << 20);
+  const auto* after = static_cast<const char*>(sbrk(0));
+  mallopt(M_TOP_PAD, 128 << 10);  // glibc's default again for later growth
+  if (probe != nullptr && after > before) {
+    constexpr std::uintptr_t huge = std::uintptr_t(2) << 20;
+    const std::uintptr_t lo = (reinterpret_cast<std::uintptr_t>(before) + huge - 1) & ~(huge - 1);
+    const std::uintptr_t hi = reinterpret_cast<std::uintptr_t>(after) & ~(huge - 1);
+    if (hi > lo && madvise(reinterpret_cast<void*>(lo), hi - lo, MADV_HUGEPAGE) == 0) out.huge_bytes = hi - lo;
+  }
+  std::free(probe);
+  out.applied = true;
+#else
+  (void)reserve_bytes;
+#endif
+  return out;
+}
+
+}  // namespace ido
