@@ -3,6 +3,7 @@
 // and the kernel's madvise are used; nothing of the allocator is replaced.
 #include "ido/core/memory.h"
 
+#include <atomic>
 #include <cstdint>
 #include <cstdlib>
 
@@ -23,6 +24,11 @@
 #endif
 
 namespace ido {
+
+namespace {
+// Set by use_huge_page_heap: a library's buffers follow the policy only in a program that chose it.
+std::atomic<bool> g_advise{false};
+}  // namespace
 
 HeapPolicy use_huge_page_heap(std::size_t reserve_bytes) {
   HeapPolicy out;
@@ -46,10 +52,25 @@ HeapPolicy use_huge_page_heap(std::size_t reserve_bytes) {
   }
   std::free(probe);
   out.applied = true;
+  g_advise.store(true, std::memory_order_relaxed);
 #else
   (void)reserve_bytes;
 #endif
   return out;
+}
+
+void advise_huge_pages(void* data, std::size_t bytes) noexcept {
+#ifdef IDO_GLIBC_HEAP
+  constexpr std::uintptr_t huge = std::uintptr_t(2) << 20;
+  if (data == nullptr || bytes < 2 * huge || !g_advise.load(std::memory_order_relaxed)) return;
+  const auto begin = reinterpret_cast<std::uintptr_t>(data);
+  const std::uintptr_t lo = (begin + huge - 1) & ~(huge - 1);
+  const std::uintptr_t hi = (begin + bytes) & ~(huge - 1);
+  if (hi > lo) (void)madvise(reinterpret_cast<void*>(lo), hi - lo, MADV_HUGEPAGE);
+#else
+  (void)data;
+  (void)bytes;
+#endif
 }
 
 }  // namespace ido

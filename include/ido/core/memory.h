@@ -23,4 +23,13 @@ struct HeapPolicy {
 /// allocators replace glibc's.
 HeapPolicy use_huge_page_heap(std::size_t reserve_bytes = std::size_t(512) << 20);
 
+/// Advises the kernel to back a buffer that is about to be written for the first time with
+/// transparent huge pages (its 2 MiB-aligned interior; buffers under 4 MiB are left alone).
+/// For blocks above use_huge_page_heap's 32 MiB, which glibc maps afresh for each allocation
+/// (a 512 × 512 × 300 float volume: 76 800 faults of 4 KiB, against 150 of 2 MiB). Does
+/// nothing until the program has called use_huge_page_heap (a library's buffers follow the
+/// program's choice), where transparent huge pages are unsupported, and under the
+/// sanitizers; never fails.
+void advise_huge_pages(void* data, std::size_t bytes) noexcept;
+
 }  // namespace ido

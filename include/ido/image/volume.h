@@ -11,6 +11,7 @@
 
 #include "ido/core/error.h"
 #include "ido/core/math.h"
+#include "ido/core/memory.h"
 
 namespace ido::image {
 
@@ -41,7 +42,12 @@ class Volume {
                   T fill = T{})
       : m_size(size), m_spacing(spacing_mm), m_origin(origin_mm), m_direction(direction) {
     check_grid();
-    m_data.assign(static_cast<std::size_t>(size[0] * size[1] * size[2]), fill);
+    // Reserved, advised for huge pages, then filled: a large volume's first touch then maps
+    // 2 MiB per fault instead of 4 KiB (ido/core/memory.h).
+    const auto n = static_cast<std::size_t>(size[0] * size[1] * size[2]);
+    m_data.reserve(n);
+    advise_huge_pages(m_data.data(), n * sizeof(T));
+    m_data.assign(n, fill);
   }
 
   /// A volume of @p size voxels that takes over @p voxels (i fastest, then j, then k) without
