@@ -28,6 +28,18 @@ namespace ido {
 namespace {
 // Set by use_huge_page_heap: a library's buffers follow the policy only in a program that chose it.
 std::atomic<bool> g_advise{false};
+
+#ifdef IDO_GLIBC_HEAP
+// Advises the 2 MiB-aligned interior of [begin, end) for transparent huge pages; returns the
+// bytes advised (0 when the interior is empty or madvise refuses).
+std::size_t advise_interior(std::uintptr_t begin, std::uintptr_t end) {
+  constexpr std::uintptr_t huge = std::uintptr_t(2) << 20;
+  const std::uintptr_t lo = (begin + huge - 1) & ~(huge - 1);
+  const std::uintptr_t hi = end & ~(huge - 1);
+  if (hi <= lo || madvise(reinterpret_cast<void*>(lo), hi - lo, MADV_HUGEPAGE) != 0) return 0;
+  return hi - lo;
+}
+#endif
 }  // namespace
 
 HeapPolicy use_huge_page_heap(std::size_t reserve_bytes) {
@@ -44,12 +56,8 @@ HeapPolicy use_huge_page_heap(std::size_t reserve_bytes) {
   void* probe = std::malloc(std::size_t(1) << 20);
   const auto* after = static_cast<const char*>(sbrk(0));
   mallopt(M_TOP_PAD, 128 << 10);  // glibc's default again for later growth
-  if (probe != nullptr && after > before) {
-    constexpr std::uintptr_t huge = std::uintptr_t(2) << 20;
-    const std::uintptr_t lo = (reinterpret_cast<std::uintptr_t>(before) + huge - 1) & ~(huge - 1);
-    const std::uintptr_t hi = reinterpret_cast<std::uintptr_t>(after) & ~(huge - 1);
-    if (hi > lo && madvise(reinterpret_cast<void*>(lo), hi - lo, MADV_HUGEPAGE) == 0) out.huge_bytes = hi - lo;
-  }
+  if (probe != nullptr && after > before)
+    out.huge_bytes = advise_interior(reinterpret_cast<std::uintptr_t>(before), reinterpret_cast<std::uintptr_t>(after));
   std::free(probe);
   out.applied = true;
   g_advise.store(true, std::memory_order_relaxed);
@@ -61,12 +69,9 @@ HeapPolicy use_huge_page_heap(std::size_t reserve_bytes) {
 
 void advise_huge_pages(void* data, std::size_t bytes) noexcept {
 #ifdef IDO_GLIBC_HEAP
-  constexpr std::uintptr_t huge = std::uintptr_t(2) << 20;
-  if (data == nullptr || bytes < 2 * huge || !g_advise.load(std::memory_order_relaxed)) return;
+  if (data == nullptr || bytes < (std::size_t(4) << 20) || !g_advise.load(std::memory_order_relaxed)) return;
   const auto begin = reinterpret_cast<std::uintptr_t>(data);
-  const std::uintptr_t lo = (begin + huge - 1) & ~(huge - 1);
-  const std::uintptr_t hi = (begin + bytes) & ~(huge - 1);
-  if (hi > lo) (void)madvise(reinterpret_cast<void*>(lo), hi - lo, MADV_HUGEPAGE);
+  (void)advise_interior(begin, begin + bytes);
 #else
   (void)data;
   (void)bytes;

@@ -44,9 +44,7 @@ image::Volume<float> to_volume(detail::RawVolume raw, const std::string& path) {
   if (!dir.allFinite() || std::abs(dir.determinant()) < 1e-6)
     throw IoError(path, "direction matrix is singular or not finite");
   try {
-    if (size[0] < 0 || size[1] < 0 || size[2] < 0 ||
-        raw.voxels.size() != static_cast<std::size_t>(size[0] * size[1] * size[2]))
-      throw IoError(path, "voxel count does not match the header's size");
+    // The constructor checks the voxel count against the size (InvalidInput, named below).
     return image::Volume<float>(size, std::move(raw.voxels), spacing, origin, dir);
   } catch (const InvalidInput& e) {
     throw IoError(path, e.what());

@@ -7,6 +7,7 @@
 
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <memory>
 #include <string>
 
@@ -29,6 +30,12 @@ long faults_to_fill(std::size_t bytes, char value) {
   volatile char keep = block[bytes / 2];
   (void)keep;
   return minor_faults() - before;
+}
+
+// The kernel's transparent-huge-page mode line ("always [madvise] never"), empty if unknown.
+std::string thp_mode() {
+  std::ifstream thp("/sys/kernel/mm/transparent_hugepage/enabled");
+  return {std::istreambuf_iterator<char>(thp), std::istreambuf_iterator<char>()};
 }
 
 constexpr bool kGlibcLinux =
@@ -60,9 +67,7 @@ TEST(HugePageHeap, ReusesFreedBuffersAndMapsFreshOnesInHugePages) {
   // Freed memory stays in the heap: filling a block of the same size again faults on
   // (almost) no page. Without the policy glibc maps such a block afresh and faults on all.
   EXPECT_LT(faults_to_fill(bytes, 2), pages / 20);
-  std::ifstream thp("/sys/kernel/mm/transparent_hugepage/enabled");
-  std::string mode((std::istreambuf_iterator<char>(thp)), std::istreambuf_iterator<char>());
-  if (p.huge_bytes == 0 || mode.find("[never]") != std::string::npos) return;
+  if (p.huge_bytes == 0 || thp_mode().find("[never]") != std::string::npos) return;
   EXPECT_GE(p.huge_bytes, std::size_t(200) << 20);
   // A larger block (still below the 32 MiB mapping threshold) reuses the freed 21 MiB and
   // extends into fresh heap, which lies in the advised range: 2 MiB per fault where the
@@ -74,9 +79,7 @@ TEST(HugePageHeap, ReusesFreedBuffersAndMapsFreshOnesInHugePages) {
 TEST(HugePageHeap, AdvisedLargeBlocksFaultPerHugePage) {
   if (sanitized() || !kGlibcLinux) GTEST_SKIP() << "glibc on Linux without sanitizers only";
   ASSERT_TRUE(use_huge_page_heap(std::size_t(64) << 20).applied);
-  std::ifstream thp("/sys/kernel/mm/transparent_hugepage/enabled");
-  std::string mode((std::istreambuf_iterator<char>(thp)), std::istreambuf_iterator<char>());
-  if (mode.find("[never]") != std::string::npos) GTEST_SKIP() << "transparent huge pages are off";
+  if (thp_mode().find("[never]") != std::string::npos) GTEST_SKIP() << "transparent huge pages are off";
   // Above the heap's 32 MiB glibc maps each block afresh: 16 384 faults of 4 KiB for 64 MiB.
   constexpr std::size_t bytes = std::size_t(64) << 20;
   auto block = std::unique_ptr<char[]>(new char[bytes]);
