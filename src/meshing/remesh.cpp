@@ -95,13 +95,15 @@ struct SurfaceRemesher::Impl {
       if (t[k] == a && t[(k + 1) % 3] == b) return true;
     return false;
   }
+  // The neighbours of v in increasing order. On a closed oriented manifold (which every
+  // operation here keeps) each neighbour follows v in exactly one of its triangles.
   static void neighbours(const SurfaceRemesher& r, std::int32_t v, std::vector<std::int32_t>& out) {
     out.clear();
-    for (std::int32_t t : r.m_vertex_triangles[v])
-      for (std::int32_t w : r.m_triangles[t])
-        if (w != v) out.push_back(w);
+    for (std::int32_t t : r.m_vertex_triangles[v]) {
+      const Tri& tr = r.m_triangles[t];
+      out.push_back(tr[0] == v ? tr[1] : tr[1] == v ? tr[2] : tr[0]);
+    }
     std::sort(out.begin(), out.end());
-    out.erase(std::unique(out.begin(), out.end()), out.end());
   }
   static void remove_incidence(SurfaceRemesher& r, std::int32_t v, std::int32_t t) {
     auto& l = r.m_vertex_triangles[v];
@@ -255,11 +257,18 @@ std::int64_t SurfaceRemesher::split_long_edges(double max_length_mm) {
     const std::int32_t n1 = Impl::add_triangle(*this, Tri{m, b, c});
     Impl::replace_in_triangle(*this, t2, a, m);
     const std::int32_t n2 = Impl::add_triangle(*this, Tri{m, a, d});
-    for (std::int32_t t : {t1, t2, n1, n2}) edges_of(t, [&](const EdgeItem& e) { queue.push(e); });
-    // edges_of only takes a<b edges of each triangle: push m's edges explicitly too.
-    for (std::int32_t w : {a, b, c, d}) {
-      const double e2 = (m_vertices[m] - m_vertices[w]).squaredNorm();
-      if (e2 > max2) queue.push(EdgeItem{e2, edge_key(m, w)});
+    // Every long edge of the four triangles, active or not and whichever way it runs: the
+    // new ones, and old ones next to the split. An inactive long edge left out would be met
+    // again by each split near it: the edges from its far corner to the new vertices stay
+    // about as long as it is, and the splits would never end. An edge already queued comes
+    // out twice and the second time is no longer an edge.
+    for (std::int32_t t : {t1, t2, n1, n2}) {
+      const Tri& tr = m_triangles[t];
+      for (int k = 0; k < 3; ++k) {
+        const std::int32_t u = tr[k], w = tr[(k + 1) % 3];
+        const double e2 = (m_vertices[u] - m_vertices[w]).squaredNorm();
+        if (e2 > max2) queue.push(EdgeItem{e2, edge_key(u, w)});
+      }
     }
     ++count;
   }
@@ -298,36 +307,50 @@ std::int64_t SurfaceRemesher::collapse_short_edges(double min_length_mm, double 
     const double cur2 = (m_vertices[a] - m_vertices[b]).squaredNorm();
     if (cur2 >= min2) continue;
     if (m_locked[a] && m_locked[b]) continue;
-    std::int32_t ts[2];
-    if (Impl::edge_triangles(*this, a, b, ts) != 2) continue;
-    // Link condition: the endpoints' common neighbours are exactly the two opposite vertices.
-    // Neighbours of a get `in_a`; a neighbour of b holding it is common and is moved on to
-    // `counted`, so that its second occurrence around b is not counted again.
+    // Keep b; a disappears. A locked end stays where it is.
+    if (m_locked[a]) std::swap(a, b);
+    const Vec3 target = m_locked[b] ? m_vertices[b] : 0.5 * (m_vertices[a] + m_vertices[b]);
+    // One pass over each end's triangles makes two tests, both of which must pass (their order
+    // does not change the decision). No edge left longer than max: every neighbour of either
+    // end, other than the ends (the test that fails most, so each pass stops at its first
+    // failure). Link condition: the endpoints' common neighbours are exactly the two opposite
+    // vertices. Neighbours of a get `in_a`; a neighbour of b holding it is common and is moved on
+    // to `counted`, so that its second occurrence around b is not counted again. The pass over
+    // a's triangles also finds the edge's own two (those holding b).
     const std::uint32_t in_a = stamp + 1, counted = stamp + 2;
     stamp += 2;
-    for (std::int32_t t : m_vertex_triangles[a])
-      for (std::int32_t w : m_triangles[t])
-        if (w != a) mark[w] = in_a;
+    bool ok = true;
+    std::int32_t ts[2];
+    int n_edge = 0;
+    for (std::int32_t t : m_vertex_triangles[a]) {
+      for (std::int32_t w : m_triangles[t]) {
+        if (w == a) continue;
+        mark[w] = in_a;
+        if (w == b) {
+          if (n_edge < 2) ts[n_edge] = t;
+          ++n_edge;
+        } else if ((m_vertices[w] - target).squaredNorm() > max2) {
+          ok = false;
+        }
+      }
+      if (!ok) break;
+    }
+    if (!ok || n_edge != 2) continue;
     std::int32_t common[2];
     int n_common = 0;
-    for (std::int32_t t : m_vertex_triangles[b])
-      for (std::int32_t w : m_triangles[t])
-        if (w != b && mark[w] == in_a) {
+    for (std::int32_t t : m_vertex_triangles[b]) {
+      for (std::int32_t w : m_triangles[t]) {
+        if (w == b) continue;
+        if (mark[w] == in_a) {
           mark[w] = counted;
           if (n_common < 2) common[n_common] = w;
           ++n_common;
         }
-    if (n_common != 2) continue;
-    // Keep b; a disappears. A locked end stays where it is.
-    if (m_locked[a]) std::swap(a, b);
-    const Vec3 target = m_locked[b] ? m_vertices[b] : 0.5 * (m_vertices[a] + m_vertices[b]);
-    // No edge left longer than max: every neighbour of either end, other than the ends.
-    bool ok = true;
-    for (std::int32_t v : {a, b})
-      for (std::int32_t t : m_vertex_triangles[v])
-        for (std::int32_t w : m_triangles[t])
-          if (w != a && w != b && (m_vertices[w] - target).squaredNorm() > max2) ok = false;
-    if (!ok) continue;
+        if (w != a && (m_vertices[w] - target).squaredNorm() > max2) ok = false;
+      }
+      if (!ok) break;
+    }
+    if (!ok || n_common != 2) continue;
     // No surviving triangle may turn over or become needle-thin.
     for (std::int32_t v : {a, b}) {
       for (std::int32_t t : m_vertex_triangles[v]) {

@@ -262,6 +262,40 @@ TEST(SurfaceRemesher, ActiveVerticesBoundTheChangesAndTheirTraceIsExact) {
   EXPECT_THROW(r.set_active({1, 0}), InvalidInput);
 }
 
+// An inactive edge more than twice the split bound, next to active edges being split: every
+// triangle on it keeps an edge of at least half its length, so leaving it whole would split
+// without end (the remesher once did). The pass ends, with every edge that has an active or a
+// new end within the bound, and no runaway: fewer than twice the splits of an unrestricted pass.
+TEST(SurfaceRemesher, SplitPassEndsBesideLongInactiveEdges) {
+  const auto m = sphere(10.0, 3);  // edges ≈ 1.6–2.6 mm, the bound 1.0
+  std::vector<std::uint8_t> active(m.vertices.size());
+  for (std::size_t v = 0; v < active.size(); ++v) active[v] = (v % 3 == 0) ? 1 : 0;
+  std::int64_t all_splits = 0;
+  {
+    SurfaceRemesher r(m);
+    all_splits = r.split_long_edges(1.0);
+  }
+  SurfaceRemesher r(m);
+  r.set_active(active);
+  const std::int64_t splits = r.split_long_edges(1.0);
+  EXPECT_GT(splits, 0);
+  EXPECT_LT(splits, 2 * all_splits);
+  const auto out = r.mesh();
+  expect_closed_manifold(facts(out), 2);
+  const std::vector<std::int32_t> from = r.input_index();
+  std::size_t checked = 0;
+  for (const Tri& t : out.triangles)
+    for (int k = 0; k < 3; ++k) {
+      const int a = t[k], b = t[(k + 1) % 3];
+      const bool a_active = from[a] < 0 || active[std::size_t(from[a])];
+      const bool b_active = from[b] < 0 || active[std::size_t(from[b])];
+      if (!a_active && !b_active) continue;
+      ++checked;
+      EXPECT_LE((out.vertices[a] - out.vertices[b]).norm(), 1.0 + 1e-12) << a << "-" << b;
+    }
+  EXPECT_GT(checked, 1000u);
+}
+
 TEST(SurfaceRemesher, RejectsOpenMesh) {
   auto m = sphere(1.0, 1);
   m.triangles.pop_back();

@@ -61,7 +61,11 @@ class SurfaceRemesher {
   /// and relaxation to active vertices. Vertices created by a split, and the vertex a collapse
   /// keeps, are active. For a caller that knows which part of the surface moved since the
   /// last remesh (the balloon's sleeping vertices): edges between two vertices that did not
-  /// move keep the length they had then. @throws ido::InvalidInput on a wrong size.
+  /// move keep the length they had then. One exception keeps a split pass finite: an edge
+  /// between two inactive vertices that is longer than the split bound is split when a split
+  /// next to it (one of its triangles) meets it; left whole, each split near it would leave
+  /// an edge from its far corner about as long as itself, without end.
+  /// @throws ido::InvalidInput on a wrong size.
   void set_active(std::vector<std::uint8_t> active);
   /// Runs the full schedule of @p options.
   RemeshStats remesh(const RemeshOptions& options);
