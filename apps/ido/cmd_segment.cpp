@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // `ido segment CT --seed X,Y,Z | --seed-voxel I,J,K [--reference HU --tolerance HU]
-//  [--roi x0,y0,z0,x1,y1,z1] -o SURFACE [--mask MASK] [--report R.json]
+//  [--roi x0,y0,z0,x1,y1,z1] [--edge-reach VOXELS] -o SURFACE [--mask MASK] [--report R.json]
 //  [--calcium HU [--calcium-reach MM]] [--snapshots DIR [--snapshot-every N] [--snapshot-size WxH]]`:
 //  balloon segmentation.
 // Presentation only: the method is ido::segment::Balloon.
@@ -45,6 +45,7 @@ struct SegmentCliOptions {
   std::optional<double> calcium;
   double calcium_reach_mm = 4.0;
   int max_iterations = 4000;
+  double edge_reach_voxels = 0.0;  // 0: no limit
   std::string snapshots;
   std::int64_t snapshot_every = 0;  // 0: chosen so that a run gives 15–30 pictures
   std::string snapshot_size = "1000x500";
@@ -164,6 +165,9 @@ void run(const SegmentCliOptions& o, const GlobalOptions& g) {
   if (o.calcium && !std::isfinite(*o.calcium)) throw InvalidInput("--calcium must be a finite intensity");
   if (!(o.calcium_reach_mm > 0) || !std::isfinite(o.calcium_reach_mm))
     throw InvalidInput(fmt::format("--calcium-reach must be a positive length in mm, got {}", o.calcium_reach_mm));
+  if (!(o.edge_reach_voxels >= 0) || !std::isfinite(o.edge_reach_voxels))
+    throw InvalidInput(fmt::format("--edge-reach must be 0 (no limit) or a positive number of voxels, got {}",
+                                   o.edge_reach_voxels));
   const std::string ext = std::filesystem::path(o.output).extension().string();
   if (ext != ".stl" && ext != ".ply" && ext != ".obj" && ext != ".vtp")
     throw InvalidInput(fmt::format("{}: the surface output must be .stl, .ply, .obj or .vtp", o.output));
@@ -198,6 +202,7 @@ void run(const SegmentCliOptions& o, const GlobalOptions& g) {
   bo.accept_brighter = o.bone;
   if (o.white_noise) bo.estimate.residual_ball_factor = 5.0;
   bo.max_iterations = o.max_iterations;
+  bo.edge_reach_voxels = o.edge_reach_voxels;
   if (!o.roi.empty()) bo.roi_mm = parse_roi(o.roi);
   auto progress = make_progress(g.quiet);
   std::vector<KeptSurface> kept;
@@ -264,6 +269,7 @@ void run(const SegmentCliOptions& o, const GlobalOptions& g) {
         {"tolerance", rep.model.tolerance},
         {"accept_brighter", rep.model.accept_brighter},
         {"iterations", rep.iterations},
+        {"edge_reach_voxels", o.edge_reach_voxels},
         {"seconds", rep.seconds},
         {"phase_seconds",
          {{"setup", rep.phase_seconds.setup},
@@ -337,6 +343,11 @@ void setup(CLI::App& app, const GlobalOptions& g) {
                   "add calcified plaque: voxels brighter than this (e.g. HU, above the lumen's band) touching the "
                   "lumen, for references that count the vessel wall's calcium");
   sub->add_option("--calcium-reach", opts->calcium_reach_mm, "how far (mm) plaque may reach from the lumen; default 4");
+  sub->add_option("--edge-reach", opts->edge_reach_voxels,
+                  "how far (voxels of the smallest spacing) the final snap to the wall may move the surface from "
+                  "where the inflation stopped; 0 = no limit (default). 2 keeps the front from creeping past a "
+                  "neck into a neighbour, but also stops it following thin vessels whose blurred interior the "
+                  "inflation rejects");
   sub->add_option("--max-iterations", opts->max_iterations, "safeguard on inflation steps");
   sub->add_option("-o,--output", opts->output, "surface file (.stl .ply .obj .vtp)")->required();
   sub->add_option("--mask", opts->mask, "binary mask on the input grid (1 inside)");

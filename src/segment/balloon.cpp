@@ -142,6 +142,10 @@ struct Balloon::State {
   // remesh for the vertices it left in place; emptied (every vertex awake) by a repair.
   std::vector<std::uint8_t> quiet;
   bool inflating = true;  // false from the edge stage on (no sleeping there)
+  // The inflated surface's signed distance (mm, band edge_reach + 2 h), made when the edge
+  // stage starts if BalloonOptions::edge_reach_voxels > 0; empty otherwise.
+  image::Volume<float> inflated_distance;
+  double edge_reach_mm = 0.0;
   // Per vertex: moved, or one of its triangles re-connected, since the last self-intersection
   // search that found none (empty = every vertex). The next search then tests only the
   // triangles with such a corner against the others (geometry::self_intersections_touching).
@@ -199,6 +203,26 @@ struct Balloon::State {
     for (int a = 0; a < 3; ++a)
       if (!(idx[a] >= -0.5 && idx[a] <= double(smoothed.size(a)) - 0.5)) return false;
     return true;
+  }
+  // The edge stage's limit (BalloonOptions::edge_reach_voxels): the signed distance of the
+  // surface as the inflation left it, on an isotropic grid of spacing h around it.
+  void anchor_edge_stage() {
+    if (!(opt.edge_reach_voxels > 0)) return;
+    edge_reach_mm = opt.edge_reach_voxels * h;
+    const geometry::TriangleMesh m = mesh();
+    Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
+    for (const Vec3& p : m.vertices) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+    const double margin = edge_reach_mm + 3.0 * h;
+    Index3 size;
+    for (int a = 0; a < 3; ++a) size[a] = static_cast<std::int64_t>(std::ceil((hi[a] - lo[a] + 2.0 * margin) / h)) + 1;
+    const image::Volume<float> grid(size, Vec3::Constant(h), lo - Vec3::Constant(margin));
+    meshing::SignedDistanceOptions sd;
+    sd.band_mm = edge_reach_mm + 2.0 * h;  // beyond it the field is ±band: outside the reach
+    sd.threaded = opt.threaded;
+    inflated_distance = meshing::signed_distance(m, grid, sd);
   }
   void remesh() {
     const PhaseTimer timer(report.phase_seconds.remesh);
@@ -523,6 +547,14 @@ struct Balloon::State {
           const double len = delta.norm();
           if (len > step) delta *= step / len;
           next[i] = x[i] + delta;
+          if (edge_stage && edge_reach_mm > 0) {
+            // Beyond the reach from the inflated surface, only moves back towards it.
+            const double after = std::abs(inflated_distance.sample(next[i]));
+            if (after > edge_reach_mm && after > std::abs(inflated_distance.sample(x[i]))) {
+              next[i] = x[i];
+              delta = Vec3::Zero();
+            }
+          }
           v[i] = delta;
         },
         opt.threaded, 512);
@@ -559,6 +591,8 @@ Balloon::Balloon(const image::Volume<float>& ct, const std::vector<Vec3>& seeds_
     throw InvalidInput("balloon: sleep_steps must be in [0, 255] and sleep_move_voxels non-negative");
   if (options.roi_mm && ((*options.roi_mm)[0].array() >= (*options.roi_mm)[1].array()).any())
     throw InvalidInput("balloon: the region of interest must have min < max on every axis");
+  if (!(options.edge_reach_voxels >= 0) || !std::isfinite(options.edge_reach_voxels))
+    throw InvalidInput("balloon: edge_reach_voxels must be 0 (no limit) or positive");
   m->opt = options;
   m->h = ct.spacing().minCoeff();
   image::GaussianOptions go;
@@ -661,6 +695,7 @@ BalloonResult Balloon::run(Progress* progress) {
   for (std::size_t i = 0; i < s.particles.size(); ++i) s.particles.set_fixed(i, false);
   if (s.opt.edge_refinement) {
     report(progress, 0.9, "snapping to edges");
+    s.anchor_edge_stage();
     for (int it = 0; it < s.opt.edge_iterations; ++it) {
       s.move(true);
       ++s.iteration;

@@ -590,6 +590,11 @@ TEST(Balloon, RejectsBadInput) {
   BalloonOptions o;
   o.tolerance = -1.0;
   EXPECT_THROW(Balloon(ct, {Vec3(5, 5, 5)}, o), InvalidInput);
+  for (const double reach : {-1.0, double(NAN), double(INFINITY)}) {
+    BalloonOptions r;
+    r.edge_reach_voxels = reach;
+    EXPECT_THROW(Balloon(ct, {Vec3(5, 5, 5)}, r), InvalidInput) << reach;
+  }
 }
 
 }  // namespace

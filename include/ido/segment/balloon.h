@@ -49,6 +49,15 @@ struct BalloonOptions {
   bool edge_refinement = true;          ///< final snap to the wall (edge attraction)
   int edge_iterations = 30;             ///< steps of the edge stage
   double edge_search_voxels = 2.0;      ///< edge profile half-length (× h)
+  /// How far (× h) the edge stage may take the surface from where the inflation left it: a
+  /// move that would end farther than this from the inflated surface (its signed distance,
+  /// computed once when the edge stage starts) and farther than the vertex already is, is not
+  /// made. 0 = no limit (the default). Each edge step searches ±edge_search_voxels around the
+  /// vertex's present position, so without a limit the surface can creep a search per step:
+  /// along thin structures whose blurred interior the inflation's band rejects (the vessel
+  /// tree phantom's 2-mm twigs), but also past a neck into a neighbour (ctpa: the heart and
+  /// distal branches the reference leaves out). Measured: docs/segmentation.md.
+  double edge_reach_voxels = 0.0;
   /// One-ring averaging passes of the wall offsets found by the edge stage. The per-vertex wall
   /// is noise-limited; 10 passes spread it over about a Gaussian of σ ≈ 2 edge lengths on the
   /// surface (each pass adds ≈ 3/7 ℓ² of variance per axis). Measured: docs/segmentation.md.
