@@ -55,8 +55,8 @@ struct BalloonOptions {
   /// made. 0 = no limit (the default). Each edge step searches ±edge_search_voxels around the
   /// vertex's present position, so without a limit the surface can creep a search per step:
   /// along thin structures whose blurred interior the inflation's band rejects (the vessel
-  /// tree phantom's 2-mm twigs), but also past a neck into a neighbour (ctpa: the heart and
-  /// distal branches the reference leaves out). Measured: docs/segmentation.md.
+  /// tree phantom's 2-mm twigs), which is also how it follows a real vessel's distal branches
+  /// past where a reference stops (ctpa). Measured: docs/segmentation.md.
   double edge_reach_voxels = 0.0;
   /// One-ring averaging passes of the wall offsets found by the edge stage. The per-vertex wall
   /// is noise-limited; 10 passes spread it over about a Gaussian of σ ≈ 2 edge lengths on the
