@@ -79,6 +79,31 @@ struct SurfaceRemesher::Impl {
     }
     return n;
   }
+  // Calls f(t) for every alive triangle that can hold an active edge, in increasing order: all
+  // of them without active flags, else those with an active corner (an active edge has an
+  // active end, so both its triangles are among them). Where few vertices are active (the
+  // balloon's settled surface) this is far fewer than a scan of every triangle, and the passes
+  // below see the same triangles in the same order as that scan would, minus ones it skips.
+  template <class F>
+  static void for_each_candidate_triangle(const SurfaceRemesher& r, F&& f) {
+    const std::size_t nt = r.m_triangles.size();
+    std::size_t active = 0;
+    if (!r.m_active.empty())
+      for (std::size_t v = 0; v < r.m_active.size(); ++v) active += r.m_active[v] && r.m_vertex_alive[v] ? 1 : 0;
+    if (r.m_active.empty() || 8 * active > std::size_t(r.m_alive_vertices)) {
+      for (std::size_t t = 0; t < nt; ++t)
+        if (r.m_triangle_alive[t]) f(static_cast<std::int32_t>(t));
+      return;
+    }
+    std::vector<std::int32_t> ts;
+    ts.reserve(7 * active);
+    for (std::size_t v = 0; v < r.m_active.size(); ++v)
+      if (r.m_active[v] && r.m_vertex_alive[v]) ts.insert(ts.end(), r.m_vertex_triangles[v].begin(), r.m_vertex_triangles[v].end());
+    std::sort(ts.begin(), ts.end());
+    ts.erase(std::unique(ts.begin(), ts.end()), ts.end());
+    for (std::int32_t t : ts)
+      if (r.m_triangle_alive[std::size_t(t)]) f(t);
+  }
   // Whether the edge a-b takes part (see set_active).
   static bool edge_active(const SurfaceRemesher& r, std::int32_t a, std::int32_t b) {
     return r.m_active.empty() || r.m_active[std::size_t(a)] || r.m_active[std::size_t(b)];
@@ -232,8 +257,7 @@ std::int64_t SurfaceRemesher::split_long_edges(double max_length_mm) {
     }
   };
   std::vector<EdgeItem> batch;
-  for (std::size_t t = 0; t < m_triangles.size(); ++t)
-    if (m_triangle_alive[t]) edges_of(static_cast<std::int32_t>(t), [&](const EdgeItem& e) { batch.push_back(e); });
+  Impl::for_each_candidate_triangle(*this, [&](std::int32_t t) { edges_of(t, [&](const EdgeItem& e) { batch.push_back(e); }); });
   EdgeQueue<EdgeItem, std::greater<>> queue(std::move(batch));  // longest first
   std::int64_t count = 0;
   while (!queue.empty()) {
@@ -279,16 +303,15 @@ std::int64_t SurfaceRemesher::collapse_short_edges(double min_length_mm, double 
   const double min2 = min_length_mm * min_length_mm;
   const double max2 = max_length_mm * max_length_mm;
   std::vector<EdgeItem> batch;
-  for (std::size_t t = 0; t < m_triangles.size(); ++t) {
-    if (!m_triangle_alive[t]) continue;
-    const Tri& tr = m_triangles[t];
+  Impl::for_each_candidate_triangle(*this, [&](std::int32_t t) {
+    const Tri& tr = m_triangles[std::size_t(t)];
     for (int k = 0; k < 3; ++k) {
       const std::int32_t a = tr[k], b = tr[(k + 1) % 3];
       if (a > b || !Impl::edge_active(*this, a, b)) continue;
       const double l2 = (m_vertices[a] - m_vertices[b]).squaredNorm();
       if (l2 < min2) batch.emplace_back(l2, edge_key(a, b));
     }
-  }
+  });
   EdgeQueue<EdgeItem, std::less<>> queue(std::move(batch));  // shortest first
   std::int64_t count = 0;
   // The tests below decide exactly as the textbook formulation (sorted neighbour lists, their
@@ -410,11 +433,9 @@ std::int64_t SurfaceRemesher::flip_edges() {
   std::vector<std::int32_t> valences(m_vertices.size());
   for (std::size_t v = 0; v < valences.size(); ++v) valences[v] = static_cast<std::int32_t>(m_vertex_triangles[v].size());
   auto valence = [&](std::int32_t v) { return static_cast<int>(valences[std::size_t(v)]); };
-  const std::size_t nt = m_triangles.size();
-  for (std::size_t t0 = 0; t0 < nt; ++t0) {
-    if (!m_triangle_alive[t0]) continue;
+  Impl::for_each_candidate_triangle(*this, [&](std::int32_t t0) {
     for (int k = 0; k < 3; ++k) {
-      const Tri tr = m_triangles[t0];
+      const Tri tr = m_triangles[std::size_t(t0)];
       const std::int32_t a = tr[k], b = tr[(k + 1) % 3];
       if (a > b) continue;
       // The valence test below changes each of the four |v − 6| terms by ±1 and needs a net
@@ -461,7 +482,7 @@ std::int64_t SurfaceRemesher::flip_edges() {
       ++valences[std::size_t(d)];
       ++count;
     }
-  }
+  });
   return count;
 }
 
