@@ -262,6 +262,66 @@ TEST(SurfaceRemesher, ActiveVerticesBoundTheChangesAndTheirTraceIsExact) {
   EXPECT_THROW(r.set_active({1, 0}), InvalidInput);
 }
 
+// A small active region (under an eighth of the vertices: the passes then visit only the
+// triangles with an active corner instead of scanning all of them). After the split every edge
+// with an active or new end is within the bound; after collapse and flip the surface is still
+// closed and manifold, every input edge between two inactive vertices is still there, and every
+// triangle with only inactive corners was in the input.
+TEST(SurfaceRemesher, SmallActiveRegionIsRemeshedCompletelyAndAlone) {
+  const auto m = sphere(10.0, 3);  // edges ≈ 1.6–2.6 mm
+  std::vector<std::uint8_t> active(m.vertices.size());
+  std::size_t n_active = 0;
+  for (std::size_t v = 0; v < active.size(); ++v) n_active += active[v] = m.vertices[v].z() > 8.0 ? 1 : 0;
+  ASSERT_GT(n_active, 20u);
+  ASSERT_LT(8 * n_active, m.vertices.size());
+  std::set<std::pair<int, int>> input_edges;
+  std::set<std::array<int, 3>> input_triangles;
+  auto canonical = [](std::array<int, 3> t) {
+    std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
+    return t;
+  };
+  for (const Tri& t : m.triangles) {
+    input_triangles.insert(canonical({t[0], t[1], t[2]}));
+    for (int k = 0; k < 3; ++k) input_edges.insert(std::minmax(t[k], t[(k + 1) % 3]));
+  }
+  SurfaceRemesher r(m);
+  r.set_active(active);
+  auto is_active = [&](const std::vector<std::int32_t>& from, int v) { return from[v] < 0 || active[std::size_t(from[v])]; };
+  EXPECT_GT(r.split_long_edges(2.0), 0);
+  {
+    const auto out = r.mesh();
+    const auto from = r.input_index();
+    for (const Tri& t : out.triangles)
+      for (int k = 0; k < 3; ++k) {
+        const int a = t[k], b = t[(k + 1) % 3];
+        if (is_active(from, a) || is_active(from, b)) {
+          EXPECT_LE((out.vertices[a] - out.vertices[b]).norm(), 2.0 + 1e-12);
+        }
+      }
+  }
+  EXPECT_GT(r.collapse_short_edges(1.9, 3.0) + r.flip_edges(), 0);
+  const auto out = r.mesh();
+  expect_closed_manifold(facts(out), 2);
+  const auto from = r.input_index();
+  std::set<std::pair<int, int>> kept_edges;
+  std::vector<std::uint8_t> kept(m.vertices.size(), 0);
+  for (const Tri& t : out.triangles) {
+    const std::array<int, 3> src{from[t[0]], from[t[1]], from[t[2]]};
+    if (!is_active(from, t[0]) && !is_active(from, t[1]) && !is_active(from, t[2])) {
+      EXPECT_TRUE(input_triangles.count(canonical(src)));
+    }
+    for (int k = 0; k < 3; ++k)
+      if (src[k] >= 0 && src[(k + 1) % 3] >= 0) {
+        kept[std::size_t(src[k])] = 1;
+        kept_edges.insert(std::minmax(src[k], src[(k + 1) % 3]));
+      }
+  }
+  for (const auto& [a, b] : input_edges)
+    if (!active[std::size_t(a)] && !active[std::size_t(b)] && kept[std::size_t(a)] && kept[std::size_t(b)]) {
+      EXPECT_TRUE(kept_edges.count({a, b})) << a << "-" << b;
+    }
+}
+
 // An inactive edge more than twice the split bound, next to active edges being split: every
 // triangle on it keeps an edge of at least half its length, so leaving it whole would split
 // without end (the remesher once did). The pass ends, with every edge that has an active or a
