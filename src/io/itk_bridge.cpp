@@ -85,8 +85,7 @@ RawVolume from_itk(const FloatImage* img) {
   RawVolume out = from_itk_header(img);
   const auto sz = img->GetLargestPossibleRegion().GetSize();
   const std::size_t n = static_cast<std::size_t>(sz[0]) * sz[1] * sz[2];
-  out.voxels.reserve(n);
-  advise_huge_pages(out.voxels.data(), n * sizeof(float));  // written once, below
+  reserve_advised(out.voxels, n);  // written once, below
   out.voxels.assign(img->GetBufferPointer(), img->GetBufferPointer() + n);
   return out;
 }
@@ -209,8 +208,7 @@ RawVolume read_slices_in_parallel(const std::string& dir, const std::vector<std:
   if (static_cast<std::size_t>(out.grid.size[2]) != files.size())
     throw IoError(dir, fmt::format("DICOM series of {} files gives {} slices; expected one slice per file",
                                    files.size(), out.grid.size[2]));
-  out.voxels.reserve(nx * ny * files.size());
-  advise_huge_pages(out.voxels.data(), nx * ny * files.size() * sizeof(float));
+  reserve_advised(out.voxels, nx * ny * files.size());
   out.voxels.assign(nx * ny * files.size(), 0.0f);
   using SliceReader = itk::ImageFileReader<FloatImage>;
   std::vector<SliceReader::Pointer> readers(files.size());

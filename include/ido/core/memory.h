@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 #include <cstddef>
+#include <vector>
 
 namespace ido {
 
@@ -31,5 +32,15 @@ HeapPolicy use_huge_page_heap(std::size_t reserve_bytes = std::size_t(512) << 20
 /// program's choice), where transparent huge pages are unsupported, and under the
 /// sanitizers; never fails.
 void advise_huge_pages(void* data, std::size_t bytes) noexcept;
+
+/// Reserves room for @p n elements in an empty @p v and advises that block
+/// (advise_huge_pages) before anything is written to it: fill it next (`assign`, `resize`,
+/// `insert`) without growing past @p n. For the large buffers written once: a volume's voxels,
+/// a reader's decoded slices.
+template <class T>
+void reserve_advised(std::vector<T>& v, std::size_t n) {
+  v.reserve(n);
+  advise_huge_pages(v.data(), n * sizeof(T));
+}
 
 }  // namespace ido

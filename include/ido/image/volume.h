@@ -45,8 +45,7 @@ class Volume {
     // Reserved, advised for huge pages, then filled: a large volume's first touch then maps
     // 2 MiB per fault instead of 4 KiB (ido/core/memory.h).
     const auto n = static_cast<std::size_t>(size[0] * size[1] * size[2]);
-    m_data.reserve(n);
-    advise_huge_pages(m_data.data(), n * sizeof(T));
+    reserve_advised(m_data, n);
     m_data.assign(n, fill);
   }
 
