@@ -92,6 +92,28 @@ void expect_closed_manifold(const Facts& f, long euler) {
   EXPECT_EQ(f.euler, euler);
 }
 
+// A triangle's corners rotated so that the smallest index comes first.
+std::array<int, 3> canonical(std::array<int, 3> t) {
+  std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
+  return t;
+}
+
+// The input's edges (as ordered pairs) and triangles (canonical), to check what a restricted
+// remesh left in place.
+struct InputTopology {
+  std::set<std::pair<int, int>> edges;
+  std::set<std::array<int, 3>> triangles;
+};
+
+InputTopology input_topology(const geometry::TriangleMesh& m) {
+  InputTopology in;
+  for (const Tri& t : m.triangles) {
+    in.triangles.insert(canonical({t[0], t[1], t[2]}));
+    for (int k = 0; k < 3; ++k) in.edges.insert(std::minmax(t[k], t[(k + 1) % 3]));
+  }
+  return in;
+}
+
 TEST(SurfaceRemesher, SplitBoundsEveryEdgeAndKeepsManifold) {
   const auto m = sphere(10.0, 1);  // edges ≈ 7 mm
   SurfaceRemesher r(m);
@@ -201,16 +223,9 @@ TEST(SurfaceRemesher, ActiveVerticesBoundTheChangesAndTheirTraceIsExact) {
   const auto m = sphere(10.0, 3);  // edges ≈ 1.6–2.6 mm
   std::vector<std::uint8_t> active(m.vertices.size());
   for (std::size_t v = 0; v < active.size(); ++v) active[v] = m.vertices[v].z() > 4.0 ? 1 : 0;
-  std::set<std::pair<int, int>> input_edges;
-  std::set<std::array<int, 3>> input_triangles;  // rotated so the smallest index comes first
-  auto canonical = [](std::array<int, 3> t) {
-    std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
-    return t;
-  };
-  for (const Tri& t : m.triangles) {
-    input_triangles.insert(canonical({t[0], t[1], t[2]}));
-    for (int k = 0; k < 3; ++k) input_edges.insert(std::minmax(t[k], t[(k + 1) % 3]));
-  }
+  const InputTopology in = input_topology(m);
+  const auto& input_edges = in.edges;
+  const auto& input_triangles = in.triangles;
   std::size_t kept_restricted = 0, kept_unrestricted = 0;  // inactive input edges left in place
   for (const bool restricted : {true, false}) {
     SurfaceRemesher r(m);
@@ -274,16 +289,9 @@ TEST(SurfaceRemesher, SmallActiveRegionIsRemeshedCompletelyAndAlone) {
   for (std::size_t v = 0; v < active.size(); ++v) n_active += active[v] = m.vertices[v].z() > 8.0 ? 1 : 0;
   ASSERT_GT(n_active, 20u);
   ASSERT_LT(8 * n_active, m.vertices.size());
-  std::set<std::pair<int, int>> input_edges;
-  std::set<std::array<int, 3>> input_triangles;
-  auto canonical = [](std::array<int, 3> t) {
-    std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
-    return t;
-  };
-  for (const Tri& t : m.triangles) {
-    input_triangles.insert(canonical({t[0], t[1], t[2]}));
-    for (int k = 0; k < 3; ++k) input_edges.insert(std::minmax(t[k], t[(k + 1) % 3]));
-  }
+  const InputTopology in = input_topology(m);
+  const auto& input_edges = in.edges;
+  const auto& input_triangles = in.triangles;
   SurfaceRemesher r(m);
   r.set_active(active);
   auto is_active = [&](const std::vector<std::int32_t>& from, int v) { return from[v] < 0 || active[std::size_t(from[v])]; };

@@ -89,16 +89,22 @@ TEST(BoneAccuracy, LowNoiseStillClosesThePosteriorArch) {
   }
 }
 
+// The vessel tree phantom of the suite's noise draw (seed 11): σ = 20 % of the contrast,
+// 0.7-voxel blur, 1-mm voxels.
+Phantom noisy_vessel_tree() {
+  PhantomOptions po;
+  po.blur_voxels = 0.7;
+  po.seed = 11;
+  po.noise_hu = 0.2 * make_phantom(PhantomKind::VesselTree, po).contrast_hu;
+  return make_phantom(PhantomKind::VesselTree, po);
+}
+
 // The active front (BalloonOptions::sleep_steps) skips the settled part of the surface: on
 // the vessel tree, whose ends travel long after its trunk has settled, at least half of the
 // vertex updates while inflating are skipped, and the result is as accurate as updating every
 // vertex every step (same Euler number, Dice within 0.005, both ≥ 0.97).
 TEST(ActiveFront, SkipsTheSettledSurfaceWithoutLosingAccuracy) {
-  PhantomOptions po;
-  po.blur_voxels = 0.7;
-  po.seed = 11;
-  po.noise_hu = 0.2 * make_phantom(PhantomKind::VesselTree, po).contrast_hu;
-  const Phantom p = make_phantom(PhantomKind::VesselTree, po);
+  const Phantom p = noisy_vessel_tree();
   double dice[2] = {0, 0};
   for (const int sleep : {0, 10}) {
     BalloonOptions bo;
@@ -128,11 +134,7 @@ TEST(ActiveFront, SkipsTheSettledSurfaceWithoutLosingAccuracy) {
 // left; without the limit some go well beyond it. The trunk's wall is found either way: the
 // limited surface loses only the twigs' tips (Dice within 0.03 of the unlimited one).
 TEST(EdgeReach, KeepsTheEdgeStageNearTheInflatedSurface) {
-  PhantomOptions po;
-  po.blur_voxels = 0.7;
-  po.seed = 11;
-  po.noise_hu = 0.2 * make_phantom(PhantomKind::VesselTree, po).contrast_hu;
-  const Phantom p = make_phantom(PhantomKind::VesselTree, po);
+  const Phantom p = noisy_vessel_tree();
   const double h = p.ct_hu.spacing().minCoeff();
   double farthest[2] = {0, 0}, dice[2] = {0, 0};
   for (const double reach : {0.0, 2.0}) {
