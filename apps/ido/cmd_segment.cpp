@@ -345,8 +345,9 @@ void setup(CLI::App& app, const GlobalOptions& g) {
   sub->add_option("--calcium-reach", opts->calcium_reach_mm, "how far (mm) plaque may reach from the lumen; default 4");
   sub->add_option("--edge-reach", opts->edge_reach_voxels,
                   "how far (voxels of the smallest spacing) the final snap to the wall may move the surface from "
-                  "where the inflation stopped; 0 = no limit (default). 2 keeps the front from creeping past a "
-                  "neck into a neighbour, but also stops it following thin vessels whose blurred interior the "
+                  "where the inflation stopped; 0 = no limit (default). 2 keeps the surface to the vessel the "
+                  "inflation filled (not creeping along distal branches a reference may leave out), but also "
+                  "stops it following vessels thinner than about 2.5 voxels, whose blurred interior the "
                   "inflation rejects");
   sub->add_option("--max-iterations", opts->max_iterations, "safeguard on inflation steps");
   sub->add_option("-o,--output", opts->output, "surface file (.stl .ply .obj .vtp)")->required();
