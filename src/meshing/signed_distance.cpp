@@ -146,6 +146,21 @@ Vec3 closest_point_on_triangle_mm(const Vec3& p, const Vec3& a, const Vec3& b, c
   return a + ab * (vb * denom) + ac * (vc * denom);
 }
 
+image::Volume<float> distance_grid(const geometry::TriangleMesh& surface, double spacing_mm, int margin_cells) {
+  if (surface.vertices.empty()) throw InvalidInput("distance grid: the mesh has no vertices");
+  if (!(spacing_mm > 0) || !std::isfinite(spacing_mm) || margin_cells < 0)
+    throw InvalidInput("distance grid: the spacing must be positive and the margin not negative");
+  Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
+  for (const Vec3& v : surface.vertices) {
+    lo = lo.cwiseMin(v);
+    hi = hi.cwiseMax(v);
+  }
+  Index3 size;
+  for (int a = 0; a < 3; ++a)
+    size[a] = static_cast<std::int64_t>(std::ceil((hi[a] - lo[a]) / spacing_mm)) + 2 * margin_cells + 1;
+  return image::Volume<float>(size, Vec3::Constant(spacing_mm), lo - Vec3::Constant(margin_cells * spacing_mm));
+}
+
 image::Volume<float> signed_distance(const geometry::TriangleMesh& surface,
                                      const image::Volume<float>& grid,
                                      const SignedDistanceOptions& options) {

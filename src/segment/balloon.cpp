@@ -145,7 +145,6 @@ struct Balloon::State {
   // The inflated surface's signed distance (mm, band edge_reach + 2 h), made when the edge
   // stage starts if BalloonOptions::edge_reach_voxels > 0; empty otherwise.
   image::Volume<float> inflated_distance;
-  double edge_reach_mm = 0.0;
   // Per vertex: moved, or one of its triangles re-connected, since the last self-intersection
   // search that found none (empty = every vertex). The next search then tests only the
   // triangles with such a corner against the others (geometry::self_intersections_touching).
@@ -208,21 +207,12 @@ struct Balloon::State {
   // surface as the inflation left it, on an isotropic grid of spacing h around it.
   void anchor_edge_stage() {
     if (!(opt.edge_reach_voxels > 0)) return;
-    edge_reach_mm = opt.edge_reach_voxels * h;
     const geometry::TriangleMesh m = mesh();
-    Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
-    for (const Vec3& p : m.vertices) {
-      lo = lo.cwiseMin(p);
-      hi = hi.cwiseMax(p);
-    }
-    const double margin = edge_reach_mm + 3.0 * h;
-    Index3 size;
-    for (int a = 0; a < 3; ++a) size[a] = static_cast<std::int64_t>(std::ceil((hi[a] - lo[a] + 2.0 * margin) / h)) + 1;
-    const image::Volume<float> grid(size, Vec3::Constant(h), lo - Vec3::Constant(margin));
     meshing::SignedDistanceOptions sd;
-    sd.band_mm = edge_reach_mm + 2.0 * h;  // beyond it the field is ±band: outside the reach
+    sd.band_mm = (opt.edge_reach_voxels + 2.0) * h;  // beyond it the field is ±band: outside the reach
     sd.threaded = opt.threaded;
-    inflated_distance = meshing::signed_distance(m, grid, sd);
+    inflated_distance =
+        meshing::signed_distance(m, meshing::distance_grid(m, h, int(std::ceil(opt.edge_reach_voxels)) + 3), sd);
   }
   void remesh() {
     const PhaseTimer timer(report.phase_seconds.remesh);
@@ -367,6 +357,7 @@ struct Balloon::State {
     const std::size_t n = x.size();
     const double step = opt.step_voxels * h;
     const double search = opt.edge_search_voxels * h;
+    const double edge_reach_mm = opt.edge_reach_voxels * h;  // used while inflated_distance is set
     const double min_rise = 0.25 * model.tolerance / h;
     const double sigma2 = std::pow(opt.smoothing_sigma_voxels * h, 2) + std::pow(opt.scanner_blur_voxels * h, 2);
     const double edge_k = opt.edge_stop > 0 ? opt.edge_stop * model.tolerance / h : 0.0;
@@ -547,7 +538,7 @@ struct Balloon::State {
           const double len = delta.norm();
           if (len > step) delta *= step / len;
           next[i] = x[i] + delta;
-          if (edge_stage && edge_reach_mm > 0) {
+          if (edge_stage && !inflated_distance.empty()) {
             // Beyond the reach from the inflated surface, only moves back towards it.
             const double after = std::abs(inflated_distance.sample(next[i]));
             if (after > edge_reach_mm && after > std::abs(inflated_distance.sample(x[i]))) {

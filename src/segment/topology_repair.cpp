@@ -63,16 +63,8 @@ geometry::TriangleMesh repair_topology(
   if (mesh.triangles.empty()) throw InvalidInput("topology repair: the mesh has no triangles");
   if (!(options.grid_spacing_mm > 0) || !(options.target_edge_mm > 0))
     throw InvalidInput("topology repair: grid spacing and target edge must be positive");
-  Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
-  for (const Vec3& v : mesh.vertices) {
-    lo = lo.cwiseMin(v);
-    hi = hi.cwiseMax(v);
-  }
   const double h = options.grid_spacing_mm;
-  const Vec3 origin = lo - Vec3::Constant(3 * h);
-  Index3 size;
-  for (int a = 0; a < 3; ++a) size[a] = static_cast<std::int64_t>(std::ceil((hi[a] - lo[a]) / h)) + 7;
-  const image::Volume<float> grid(size, Vec3::Constant(h), origin);
+  const image::Volume<float> grid = meshing::distance_grid(mesh, h, 3);
   meshing::SignedDistanceOptions sd;
   sd.threaded = options.threaded;
   // Marching cubes reads only the ends of grid edges the zero level crosses, within one

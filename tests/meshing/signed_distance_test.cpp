@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "ido/meshing/signed_distance.h"
 
+#include <algorithm>
 #include <cmath>
 #include <array>
 #include <initializer_list>
@@ -53,6 +54,33 @@ TEST(SignedDistanceWinding, InsideOneOutsideZeroOverlapTwo) {
   EXPECT_TRUE(test::near(w.at(Vec3(7, 1, 0)), 1.0, 0.02));
   EXPECT_TRUE(test::near(w.at(Vec3(0, 9, 0)), 0.0, 0.02));
   EXPECT_TRUE(test::near(w.at(Vec3(40, 0, 3)), 0.0, 0.01));
+}
+
+// distance_grid: isotropic and world-aligned, the vertices' bounding box plus the margin's
+// whole cells on every side (no less, and at most one cell more where the box is not a whole
+// number of cells).
+TEST(DistanceGrid, CoversTheBoundingBoxWithTheMargin) {
+  const auto m = test::octahedron_sphere(Vec3(3.0, -2.0, 7.5), 4.3, 2);
+  for (const int margin : {0, 3, 5}) {
+    const image::Volume<float> g = distance_grid(m, 0.7, margin);
+    EXPECT_EQ(g.spacing(), Vec3::Constant(0.7));
+    EXPECT_EQ(g.direction(), Mat3::Identity());
+    const Vec3 first = g.index_to_world(Vec3::Zero());
+    const Vec3 last = g.index_to_world(Vec3(double(g.size(0) - 1), double(g.size(1) - 1), double(g.size(2) - 1)));
+    for (int a = 0; a < 3; ++a) {
+      double lo = INFINITY, hi = -INFINITY;
+      for (const Vec3& v : m.vertices) {
+        lo = std::min(lo, v[a]);
+        hi = std::max(hi, v[a]);
+      }
+      EXPECT_NEAR(lo - first[a], margin * 0.7, 1e-9) << a;
+      EXPECT_GE(last[a] - hi, margin * 0.7 - 1e-9) << a;
+      EXPECT_LT(last[a] - hi, (margin + 1) * 0.7 + 1e-9) << a;
+    }
+  }
+  EXPECT_THROW((void)distance_grid(geometry::TriangleMesh{}, 1.0, 3), InvalidInput);
+  EXPECT_THROW((void)distance_grid(m, 0.0, 3), InvalidInput);
+  EXPECT_THROW((void)distance_grid(m, 1.0, -1), InvalidInput);
 }
 
 TEST(SignedDistance, SphereMatchesAnalyticDistanceAndSign) {

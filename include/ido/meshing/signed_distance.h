@@ -60,6 +60,14 @@ struct SignedDistanceOptions {
 /// is theirs: a band a little above the largest spacing gives the same level.
 /// @throws ido::InvalidInput if the grid is empty, the mesh has no triangles, an index is
 /// out of range, or distance_triangles has the wrong size.
+/// The isotropic, world-aligned grid a surface's signed distance is sampled on (its voxel
+/// values are zero): spacing @p spacing_mm, covering the vertices' bounding box with
+/// @p margin_cells whole cells beyond it on every side. The balloon's topology repair and its
+/// edge stage's reach use it. @throws ido::InvalidInput on a mesh without vertices, a
+/// non-positive spacing or a negative margin.
+[[nodiscard]] image::Volume<float> distance_grid(const geometry::TriangleMesh& surface, double spacing_mm,
+                                                 int margin_cells);
+
 [[nodiscard]] image::Volume<float> signed_distance(const geometry::TriangleMesh& surface,
                                                    const image::Volume<float>& grid,
                                                    const SignedDistanceOptions& options = {});
