@@ -131,18 +131,13 @@ struct SurfaceRemesher::Impl {
     std::sort(out.begin(), out.end());
   }
   static void remove_incidence(SurfaceRemesher& r, std::int32_t v, std::int32_t t) {
-    auto& l = r.m_vertex_triangles[v];
-    auto it = std::find(l.begin(), l.end(), t);
-    if (it != l.end()) {
-      *it = l.back();
-      l.pop_back();
-    }
+    r.m_vertex_triangles.remove(std::size_t(v), t);
   }
   static std::int32_t add_triangle(SurfaceRemesher& r, const Tri& t) {
     const auto id = static_cast<std::int32_t>(r.m_triangles.size());
     r.m_triangles.push_back(t);
     r.m_triangle_alive.push_back(1);
-    for (std::int32_t v : t) r.m_vertex_triangles[v].push_back(id);
+    for (std::int32_t v : t) r.m_vertex_triangles.push_back(std::size_t(v), id);
     return id;
   }
   static void replace_in_triangle(SurfaceRemesher& r, std::int32_t t, std::int32_t from,
@@ -151,14 +146,14 @@ struct SurfaceRemesher::Impl {
     for (auto& v : tr)
       if (v == from) v = to;
     remove_incidence(r, from, t);
-    r.m_vertex_triangles[to].push_back(t);
+    r.m_vertex_triangles.push_back(std::size_t(to), t);
   }
   static std::int32_t add_vertex(SurfaceRemesher& r, const Vec3& p, std::uint8_t locked) {
     const auto id = static_cast<std::int32_t>(r.m_vertices.size());
     r.m_vertices.push_back(p);
     r.m_vertex_alive.push_back(1);
     r.m_locked.push_back(locked);
-    r.m_vertex_triangles.emplace_back();
+    r.m_vertex_triangles.add_list();
     r.m_moved.push_back(1);
     r.m_touched.push_back(1);
     if (!r.m_active.empty()) r.m_active.push_back(1);
@@ -179,22 +174,14 @@ SurfaceRemesher::SurfaceRemesher(const geometry::TriangleMesh& mesh, std::vector
   m_touched.assign(m_vertices.size(), 0);
   m_input_vertices = m_vertices.size();
   m_triangle_alive.assign(m_triangles.size(), 1);
-  m_vertex_triangles.assign(m_vertices.size(), {});
+  m_vertex_triangles.assign(m_vertices.size());
   m_alive_vertices = nv;
-  {
-    // One allocation per incidence list (with room for a few splits), not a doubling series.
-    std::vector<std::int32_t> valence(m_vertices.size(), 0);
-    for (const Tri& tr : m_triangles)
-      for (std::int32_t v : tr)
-        if (v >= 0 && v < nv) ++valence[std::size_t(v)];
-    for (std::size_t v = 0; v < m_vertices.size(); ++v) m_vertex_triangles[v].reserve(std::size_t(valence[v]) + 2);
-  }
   for (std::size_t t = 0; t < m_triangles.size(); ++t) {
     const Tri& tr = m_triangles[t];
     for (int k = 0; k < 3; ++k) {
       if (tr[k] < 0 || tr[k] >= nv)
         throw InvalidInput("remesh: triangle " + std::to_string(t) + " has a vertex index out of range");
-      m_vertex_triangles[tr[k]].push_back(static_cast<std::int32_t>(t));
+      m_vertex_triangles.push_back(std::size_t(tr[k]), static_cast<std::int32_t>(t));
     }
     if (tr[0] == tr[1] || tr[1] == tr[2] || tr[0] == tr[2])
       throw InvalidInput("remesh: triangle " + std::to_string(t) + " repeats a vertex");
@@ -409,7 +396,7 @@ std::int64_t SurfaceRemesher::collapse_short_edges(double min_length_mm, double 
     m_vertices[b] = target;
     if (!m_active.empty()) m_active[std::size_t(b)] = 1;
     m_vertex_alive[a] = 0;
-    m_vertex_triangles[a].clear();
+    m_vertex_triangles.clear(std::size_t(a));
     --m_alive_vertices;
     ++count;
     // b's edges that are now short, each once (the queue's order depends only on its

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <string>
 #include <map>
+#include <random>
 #include <set>
 
 #include <gtest/gtest.h>
@@ -112,6 +113,54 @@ InputTopology input_topology(const geometry::TriangleMesh& m) {
     for (int k = 0; k < 3; ++k) in.edges.insert(std::minmax(t[k], t[(k + 1) % 3]));
   }
   return in;
+}
+
+// The flat incidence store must behave exactly as one std::vector per list with removal by
+// swapping in the last entry: the remesher's order of visits, hence its output, depends on it.
+// Random operations on lists that grow well past the inline slot, shrink back and regrow.
+TEST(IncidenceLists, BehaveAsVectorsWithSwapRemoval) {
+  using detail::IncidenceLists;
+  std::mt19937 rng(7);
+  IncidenceLists lists;
+  std::vector<std::vector<std::int32_t>> model(5);
+  lists.assign(model.size());
+  std::size_t longest = 0;
+  for (int op = 0; op < 200000; ++op) {
+    if (op % 50000 == 0) {
+      lists.add_list();
+      model.emplace_back();
+    }
+    const std::size_t v = rng() % model.size();
+    const unsigned what = rng() % 10;
+    auto& m = model[v];
+    if (what < 5 || m.empty()) {
+      // Lists drift between empty and over three slots' worth.
+      const auto t = static_cast<std::int32_t>(rng() % 64);
+      if (m.size() < 48) {
+        lists.push_back(v, t);
+        m.push_back(t);
+      }
+    } else if (what < 9) {
+      const std::int32_t t = rng() % 2 ? m[rng() % m.size()] : static_cast<std::int32_t>(rng() % 64);
+      lists.remove(v, t);
+      if (auto it = std::find(m.begin(), m.end(), t); it != m.end()) {
+        *it = m.back();
+        m.pop_back();
+      }
+    } else if (rng() % 20 == 0) {
+      lists.clear(v);
+      m.clear();
+    }
+    longest = std::max(longest, m.size());
+    const auto got = lists[v];
+    ASSERT_EQ(std::vector<std::int32_t>(got.begin(), got.end()), m) << "after operation " << op << " on list " << v;
+  }
+  EXPECT_GT(longest, std::size_t(3 * IncidenceLists::kInline));  // the spilled path was exercised
+  ASSERT_EQ(lists.lists(), model.size());
+  for (std::size_t v = 0; v < model.size(); ++v) {
+    const auto got = lists[v];
+    EXPECT_EQ(std::vector<std::int32_t>(got.begin(), got.end()), model[v]);
+  }
 }
 
 TEST(SurfaceRemesher, SplitBoundsEveryEdgeAndKeepsManifold) {

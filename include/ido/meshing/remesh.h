@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "ido/core/math.h"
@@ -27,6 +28,73 @@ struct RemeshStats {
   std::int64_t collapses = 0;
   std::int64_t flips = 0;
 };
+
+namespace detail {
+/// Vertex → triangle incidence lists for the remesher, in one flat array of fixed slots: a
+/// list of up to kInline entries (valences on a remeshed surface are 4–8, on a marching-cubes
+/// level rarely above 12) lives in its slot, a longer one in a block of its own. Building the
+/// lists of a 20k-vertex surface then costs no allocation per vertex, and a vertex's list
+/// shares its cache line with nothing else. A list behaves as a std::vector with removal by
+/// swapping in the last entry: the entries' order after any sequence of operations is the
+/// one a vector would have. Written by hand (no packaged small-vector fits a flat array).
+class IncidenceLists {
+ public:
+  static constexpr int kInline = 14;
+  /// @p n empty lists.
+  void assign(std::size_t n) {
+    m_slots.assign(n, Slot{});
+    m_spill.clear();
+  }
+  /// Appends an empty list.
+  void add_list() { m_slots.emplace_back(); }
+  [[nodiscard]] std::size_t lists() const { return m_slots.size(); }
+  /// The entries of list @p v; valid until the list is next changed.
+  [[nodiscard]] std::span<const std::int32_t> operator[](std::size_t v) const {
+    const Slot& s = m_slots[v];
+    return {s.spill < 0 ? s.item : m_spill[std::size_t(s.spill)].data(), std::size_t(s.size)};
+  }
+  void push_back(std::size_t v, std::int32_t t) {
+    Slot& s = m_slots[v];
+    if (s.spill < 0 && s.size < kInline) {
+      s.item[s.size++] = t;
+      return;
+    }
+    if (s.spill < 0) {
+      s.spill = static_cast<std::int32_t>(m_spill.size());
+      m_spill.emplace_back(s.item, s.item + s.size);
+    }
+    auto& block = m_spill[std::size_t(s.spill)];
+    block.push_back(t);
+    s.size = static_cast<std::int32_t>(block.size());
+  }
+  /// Removes the first entry equal to @p t (if any) by moving the last entry into its place.
+  void remove(std::size_t v, std::int32_t t) {
+    Slot& s = m_slots[v];
+    std::int32_t* d = s.spill < 0 ? s.item : m_spill[std::size_t(s.spill)].data();
+    for (std::int32_t k = 0; k < s.size; ++k)
+      if (d[k] == t) {
+        d[k] = d[s.size - 1];
+        --s.size;
+        if (s.spill >= 0) m_spill[std::size_t(s.spill)].pop_back();
+        return;
+      }
+  }
+  void clear(std::size_t v) {
+    Slot& s = m_slots[v];
+    s.size = 0;
+    if (s.spill >= 0) m_spill[std::size_t(s.spill)].clear();
+  }
+
+ private:
+  struct alignas(64) Slot {
+    std::int32_t size = 0;
+    std::int32_t spill = -1;  // index into m_spill once the list outgrew its slot
+    std::int32_t item[kInline];
+  };
+  std::vector<Slot> m_slots;
+  std::vector<std::vector<std::int32_t>> m_spill;
+};
+}  // namespace detail
 
 /// A stateful remesher for repeated use on a closed, oriented, 2-manifold triangle mesh
 /// (the balloon calls it every few steps). Every operation keeps the mesh closed, edge- and
@@ -94,7 +162,7 @@ class SurfaceRemesher {
   std::vector<std::uint8_t> m_moved;   // 1 = no longer at its input position (see input_index)
   std::vector<std::uint8_t> m_touched;  // see touched()
   std::size_t m_input_vertices = 0;
-  std::vector<std::vector<std::int32_t>> m_vertex_triangles;
+  detail::IncidenceLists m_vertex_triangles;
   std::int64_t m_alive_vertices = 0;
 };
 
