@@ -130,9 +130,6 @@ struct SurfaceRemesher::Impl {
     }
     std::sort(out.begin(), out.end());
   }
-  static void remove_incidence(SurfaceRemesher& r, std::int32_t v, std::int32_t t) {
-    r.m_vertex_triangles.remove(std::size_t(v), t);
-  }
   static std::int32_t add_triangle(SurfaceRemesher& r, const Tri& t) {
     const auto id = static_cast<std::int32_t>(r.m_triangles.size());
     r.m_triangles.push_back(t);
@@ -145,7 +142,7 @@ struct SurfaceRemesher::Impl {
     Tri& tr = r.m_triangles[t];
     for (auto& v : tr)
       if (v == from) v = to;
-    remove_incidence(r, from, t);
+    r.m_vertex_triangles.remove(std::size_t(from), t);
     r.m_vertex_triangles.push_back(std::size_t(to), t);
   }
   static std::int32_t add_vertex(SurfaceRemesher& r, const Vec3& p, std::uint8_t locked) {
@@ -387,7 +384,7 @@ std::int64_t SurfaceRemesher::collapse_short_edges(double min_length_mm, double 
     // Perform: delete the two triangles of the edge, move a's others onto b.
     for (std::int32_t t : {ts[0], ts[1]}) {
       m_triangle_alive[t] = 0;
-      for (std::int32_t v : m_triangles[t]) Impl::remove_incidence(*this, v, t);
+      for (std::int32_t v : m_triangles[t]) m_vertex_triangles.remove(std::size_t(v), t);
     }
     moved.assign(m_vertex_triangles[a].begin(), m_vertex_triangles[a].end());
     for (std::int32_t t : moved) Impl::replace_in_triangle(*this, t, a, b);
