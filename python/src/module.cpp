@@ -1,0 +1,32 @@
+// SPDX-License-Identifier: Apache-2.0
+// The Python module `ido`: numpy in and out, the C++ library underneath.
+// Errors map onto Python's: ido::InvalidInput → ValueError, ido::IoError → OSError (its
+// message names the file), ido::Cancelled → KeyboardInterrupt, any other ido::Error →
+// RuntimeError.
+#include <pybind11/pybind11.h>
+
+#include "bindings.h"
+#include "ido/core/error.h"
+
+namespace py = pybind11;
+
+PYBIND11_MODULE(ido, m) {
+  m.doc() =
+      "ido: computer-assisted surgery toolkit (Turini et al. 2007) — volumes and meshes as numpy arrays, balloon "
+      "segmentation, phantoms and accuracy metrics, marching cubes and tetrahedral meshing.";
+  m.attr("__version__") = IDO_VERSION;
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const ido::InvalidInput& e) {
+      PyErr_SetString(PyExc_ValueError, e.what());
+    } catch (const ido::IoError& e) {
+      PyErr_SetString(PyExc_OSError, e.what());
+    } catch (const ido::Cancelled& e) {
+      PyErr_SetString(PyExc_KeyboardInterrupt, e.what());
+    }
+  });
+  ido::python::bind_volume(m);
+  ido::python::bind_mesh(m);
+  ido::python::bind_segment(m);
+}

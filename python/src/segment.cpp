@@ -1,0 +1,294 @@
+// SPDX-License-Identifier: Apache-2.0
+// Balloon segmentation, phantoms and accuracy metrics seen from Python: ido.segment (one call),
+// ido.Balloon (step by step, the paper's single-step API), ido.phantom, ido.surface_to_mask,
+// ido.compare, ido.compare_mesh. Options mirror `ido segment`'s flags.
+#include <array>
+#include <cmath>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <pybind11/eigen.h>
+#include <pybind11/stl.h>
+
+#include "bindings.h"
+#include "ido/core/error.h"
+#include "ido/geometry/mesh_checks.h"
+#include "ido/geometry/self_intersection.h"
+#include "ido/segment/balloon.h"
+#include "ido/segment/calcification.h"
+#include "ido/segment/metrics.h"
+#include "ido/segment/phantom.h"
+
+namespace py = pybind11;
+
+namespace ido::python {
+namespace {
+
+using segment::BalloonOptions;
+using segment::BalloonReport;
+using segment::BalloonResult;
+
+/// The keyword arguments shared by ido.segment and ido.Balloon.
+struct SegmentArgs {
+  std::optional<double> reference, tolerance;
+  std::optional<std::array<double, 6>> roi;
+  bool bone = false, white_noise = false;
+  double edge_reach_voxels = 0.0;
+  int max_iterations = 4000;
+};
+
+BalloonOptions balloon_options(const SegmentArgs& a) {
+  if (a.tolerance && !(*a.tolerance > 0 && std::isfinite(*a.tolerance)))
+    throw InvalidInput("tolerance must be positive and finite, got " + std::to_string(*a.tolerance));
+  if (a.reference && !std::isfinite(*a.reference)) throw InvalidInput("reference must be finite");
+  if (!(a.edge_reach_voxels >= 0) || !std::isfinite(a.edge_reach_voxels))
+    throw InvalidInput("edge_reach_voxels must be 0 (no limit) or a positive number of voxels, got " +
+                       std::to_string(a.edge_reach_voxels));
+  if (a.max_iterations < 1) throw InvalidInput("max_iterations must be at least 1");
+  BalloonOptions bo;
+  bo.reference = a.reference;
+  bo.tolerance = a.tolerance;
+  bo.accept_brighter = a.bone;
+  if (a.white_noise) bo.estimate.residual_ball_factor = 5.0;  // as `ido segment --white-noise`
+  bo.edge_reach_voxels = a.edge_reach_voxels;
+  bo.max_iterations = a.max_iterations;
+  if (a.roi) {
+    const auto& r = *a.roi;
+    const Vec3 lo(r[0], r[1], r[2]), hi(r[3], r[4], r[5]);
+    if (!lo.allFinite() || !hi.allFinite() || (lo.array() >= hi.array()).any())
+      throw InvalidInput("roi: expected (x0, y0, z0, x1, y1, z1) in mm with each minimum below its maximum");
+    bo.roi_mm = std::array<Vec3, 2>{lo, hi};
+  }
+  return bo;
+}
+
+/// World seeds from @p seeds (mm) and @p seed_voxels (voxel indices of @p ct).
+std::vector<Vec3> seed_points(const image::Volume<float>& ct, const std::vector<Vec3>& seeds,
+                              const std::vector<std::array<std::int64_t, 3>>& seed_voxels) {
+  std::vector<Vec3> out = seeds;
+  for (const auto& v : seed_voxels) {
+    if (!ct.contains(v[0], v[1], v[2]))
+      throw InvalidInput("seed voxel (" + std::to_string(v[0]) + ", " + std::to_string(v[1]) + ", " +
+                         std::to_string(v[2]) + ") lies outside the " + std::to_string(ct.size(0)) + "x" +
+                         std::to_string(ct.size(1)) + "x" + std::to_string(ct.size(2)) + " volume");
+    out.push_back(ct.index_to_world(Vec3(double(v[0]), double(v[1]), double(v[2]))));
+  }
+  if (out.empty()) throw InvalidInput("give at least one seed (seeds in mm or seed_voxels)");
+  return out;
+}
+
+py::dict report_dict(const BalloonReport& r) {
+  py::dict d;
+  d["reference"] = r.model.reference;
+  d["tolerance"] = r.model.tolerance;
+  d["accept_brighter"] = r.model.accept_brighter;
+  d["iterations"] = r.iterations;
+  d["seconds"] = r.seconds;
+  py::dict phases;
+  phases["setup"] = r.phase_seconds.setup;
+  phases["move"] = r.phase_seconds.move;
+  phases["remesh"] = r.phase_seconds.remesh;
+  phases["intersections"] = r.phase_seconds.intersections;
+  phases["repair"] = r.phase_seconds.repair;
+  d["phase_seconds"] = phases;
+  d["volume_mm3"] = r.volume_mm3;
+  d["area_mm2"] = r.area_mm2;
+  d["vertices"] = r.vertices;
+  d["edges"] = r.edges;
+  d["triangles"] = r.triangles;
+  d["euler_characteristic"] = r.euler_characteristic;
+  d["components"] = r.components;
+  d["closed"] = r.closed;
+  d["manifold"] = r.manifold;
+  d["oriented"] = r.oriented;
+  d["self_intersections"] = r.self_intersections;
+  d["repairs"] = r.repairs;
+  d["local_repairs"] = r.local_repairs;
+  d["converged"] = r.converged;
+  d["stop_reason"] = r.stop_reason;
+  d["leak_warning"] = r.leak_warning;
+  return d;
+}
+
+py::dict scores_dict(const segment::SegmentationScores& s) {
+  py::dict d;
+  d["dice"] = s.dice;
+  d["hd95_mm"] = s.hd95_mm;
+  d["assd_mm"] = s.assd_mm;
+  d["hd_mm"] = s.hd_mm;
+  d["volume_ratio"] = s.volume_ratio;
+  d["components_mask"] = s.components_mask;
+  d["components_truth"] = s.components_truth;
+  d["voxels_mask"] = s.voxels_mask;
+  d["voxels_truth"] = s.voxels_truth;
+  d["volume_mask_mm3"] = s.volume_mask_mm3;
+  d["volume_truth_mm3"] = s.volume_truth_mm3;
+  d["resampled"] = s.resampled;
+  return d;
+}
+
+/// Adds calcified plaque above @p threshold to @p result (as `ido segment --calcium`).
+void add_plaque(BalloonResult& result, const image::Volume<float>& ct, double threshold, double reach_mm) {
+  if (!std::isfinite(threshold)) throw InvalidInput("calcium must be a finite intensity");
+  if (!(reach_mm > 0) || !std::isfinite(reach_mm))
+    throw InvalidInput("calcium_reach_mm must be a positive length in mm, got " + std::to_string(reach_mm));
+  const double band_top = result.report.model.reference + result.report.model.tolerance;
+  if (!result.report.model.accept_brighter && threshold <= band_top)
+    throw InvalidInput("calcium " + std::to_string(threshold) + " lies inside the lumen's accepted band (up to " +
+                       std::to_string(band_top) + "): give a threshold above it");
+  auto c = segment::add_calcification(result.surface, ct, {.threshold = threshold, .max_reach_mm = reach_mm});
+  result.surface = std::move(c.surface);
+  segment::set_surface_figures(result.report, geometry::check_mesh(result.surface),
+                               static_cast<std::int64_t>(geometry::self_intersections(result.surface).size()));
+}
+
+}  // namespace
+
+void bind_segment(py::module_& m) {
+  py::class_<BalloonResult>(m, "Segmentation", "What ido.segment / Balloon.run produced: a surface and a report.")
+      .def_readonly("surface", &BalloonResult::surface, "The closed, manifold surface (ido.TriangleMesh, mm).")
+      .def_property_readonly(
+          "report", [](const BalloonResult& r) { return report_dict(r.report); },
+          "Reference and tolerance used, iterations, seconds (and per phase), volume, area, V/E/F, Euler "
+          "characteristic, closed / manifold / oriented flags, self-intersections (0), repairs, stop reason, leak "
+          "warning.");
+
+  const char* seg_doc =
+      "Balloon segmentation (Turini et al. 2007): an icosphere at each seed inflated until it fits the wall, "
+      "refined to voxel size, self-intersections repaired so the surface takes the organ's topology. seeds: "
+      "world points (mm, LPS); seed_voxels: (i, j, k) indices. reference and tolerance (image units) are "
+      "estimated at the seeds when not given. roi = (x0, y0, z0, x1, y1, z1) mm is a safeguard box; bone "
+      "accepts anything brighter than the reference; edge_reach_voxels bounds the final snap to the wall "
+      "(0 = no limit); calcium adds plaque brighter than it within calcium_reach_mm of the lumen. Releases "
+      "the GIL while it runs. Raises ValueError for bad input.";
+  m.def(
+      "segment",
+      [](const image::Volume<float>& ct, const std::vector<Vec3>& seeds,
+         const std::vector<std::array<std::int64_t, 3>>& seed_voxels, std::optional<double> reference,
+         std::optional<double> tolerance, std::optional<std::array<double, 6>> roi, bool bone, bool white_noise,
+         double edge_reach_voxels, int max_iterations, std::optional<double> calcium, double calcium_reach_mm) {
+        const SegmentArgs a{reference, tolerance, roi, bone, white_noise, edge_reach_voxels, max_iterations};
+        const BalloonOptions bo = balloon_options(a);
+        const std::vector<Vec3> points = seed_points(ct, seeds, seed_voxels);
+        py::gil_scoped_release unlocked;
+        BalloonResult r = segment::segment_balloon(ct, points, bo);
+        if (calcium) add_plaque(r, ct, *calcium, calcium_reach_mm);
+        return r;
+      },
+      py::arg("ct"), py::arg("seeds") = std::vector<Vec3>{},
+      py::arg("seed_voxels") = std::vector<std::array<std::int64_t, 3>>{}, py::kw_only(),
+      py::arg("reference") = py::none(), py::arg("tolerance") = py::none(), py::arg("roi") = py::none(),
+      py::arg("bone") = false, py::arg("white_noise") = false, py::arg("edge_reach_voxels") = 0.0,
+      py::arg("max_iterations") = 4000, py::arg("calcium") = py::none(), py::arg("calcium_reach_mm") = 4.0, seg_doc);
+
+  py::class_<segment::Balloon>(m, "Balloon",
+                               "The balloon driven step by step: step() inflates once, surface shows the current "
+                               "mesh, run() finishes (edge stage and final repair). Same arguments as ido.segment "
+                               "without calcium.")
+      .def(py::init([](const image::Volume<float>& ct, const std::vector<Vec3>& seeds,
+                       const std::vector<std::array<std::int64_t, 3>>& seed_voxels, std::optional<double> reference,
+                       std::optional<double> tolerance, std::optional<std::array<double, 6>> roi, bool bone,
+                       bool white_noise, double edge_reach_voxels, int max_iterations) {
+             const SegmentArgs a{reference, tolerance, roi, bone, white_noise, edge_reach_voxels, max_iterations};
+             const BalloonOptions bo = balloon_options(a);
+             const std::vector<Vec3> points = seed_points(ct, seeds, seed_voxels);
+             py::gil_scoped_release unlocked;
+             return segment::Balloon(ct, points, bo);
+           }),
+           py::arg("ct"), py::arg("seeds") = std::vector<Vec3>{},
+           py::arg("seed_voxels") = std::vector<std::array<std::int64_t, 3>>{}, py::kw_only(),
+           py::arg("reference") = py::none(), py::arg("tolerance") = py::none(), py::arg("roi") = py::none(),
+           py::arg("bone") = false, py::arg("white_noise") = false, py::arg("edge_reach_voxels") = 0.0,
+           py::arg("max_iterations") = 4000)
+      .def(
+          "step",
+          [](segment::Balloon& b) {
+            py::gil_scoped_release unlocked;
+            return b.step();
+          },
+          "One inflation step; True once converged or stopped by a safeguard.")
+      .def(
+          "run",
+          [](segment::Balloon& b) {
+            py::gil_scoped_release unlocked;
+            return b.run();
+          },
+          "Steps until done, then the edge stage and the final repair; returns an ido.Segmentation.")
+      .def_property_readonly("surface", &segment::Balloon::surface, "The current surface (a copy).")
+      .def_property_readonly(
+          "reference", [](const segment::Balloon& b) { return b.model().reference; }, "The reference in use.")
+      .def_property_readonly(
+          "tolerance", [](const segment::Balloon& b) { return b.model().tolerance; }, "The tolerance in use.");
+
+  py::class_<segment::Phantom>(m, "Phantom", "A synthetic CT (HU) with its ground truth, seeds and known topology.")
+      .def_property_readonly(
+          "kind", [](const segment::Phantom& p) { return std::string(segment::phantom_kind_name(p.kind)); })
+      .def_readonly("ct", &segment::Phantom::ct_hu, "The CT-like volume (ido.Volume, HU).")
+      .def_readonly("labels", &segment::Phantom::labels, "The ground truth (ido.Mask on the same grid).")
+      .def_readonly("seeds", &segment::Phantom::seeds_mm, "Seed points inside the object (world mm).")
+      .def_readonly("seed_labels", &segment::Phantom::seed_labels, "The label each seed lies in.")
+      .def_readonly("truth_euler_characteristic", &segment::Phantom::truth_euler_characteristic)
+      .def_readonly("object_hu", &segment::Phantom::object_hu)
+      .def_readonly("background_hu", &segment::Phantom::background_hu)
+      .def_readonly("contrast_hu", &segment::Phantom::contrast_hu)
+      .def_readonly("analytic_volume_mm3", &segment::Phantom::analytic_volume_mm3, "0 where no closed form is known.")
+      .def_readonly("description", &segment::Phantom::description);
+
+  m.def(
+      "phantom_kinds",
+      [] {
+        std::vector<std::string> names;
+        for (auto k : segment::all_phantom_kinds()) names.emplace_back(segment::phantom_kind_name(k));
+        return names;
+      },
+      "The names ido.phantom accepts.");
+  m.def(
+      "phantom",
+      [](const std::string& kind, double noise_hu, double blur_voxels, const Vec3& spacing, std::uint64_t seed) {
+        const segment::PhantomKind k = segment::parse_phantom_kind(kind);
+        py::gil_scoped_release unlocked;
+        return segment::make_phantom(
+            k, {.spacing_mm = spacing, .noise_hu = noise_hu, .blur_voxels = blur_voxels, .seed = seed});
+      },
+      py::arg("kind"), py::kw_only(), py::arg("noise_hu") = 0.0, py::arg("blur_voxels") = 0.0,
+      py::arg("spacing") = Vec3(Vec3::Ones()), py::arg("seed") = 1,
+      "A synthetic CT with ground truth (see phantom_kinds()); deterministic for a seed.");
+
+  m.def(
+      "surface_to_mask",
+      [](const geometry::TriangleMesh& surface, const image::Volume<float>& like) {
+        py::gil_scoped_release unlocked;
+        return segment::surface_to_mask(surface, like);
+      },
+      py::arg("surface"), py::arg("like"),
+      "The mask (1 inside, generalised winding number > 1/2 at the voxel centre) of a closed surface on the grid "
+      "of `like`.");
+  m.def(
+      "compare",
+      [](const image::Volume<std::uint8_t>& mask, const image::Volume<std::uint8_t>& truth) {
+        segment::SegmentationScores s;
+        {
+          py::gil_scoped_release unlocked;
+          s = segment::compare_masks(mask, truth);
+        }
+        return scores_dict(s);
+      },
+      py::arg("mask"), py::arg("truth"),
+      "Dice, HD95, ASSD and Hausdorff distance (mm, both directions, spacing-aware), volume ratio and 6-connected "
+      "components of a mask against a truth, as a dict (definitions: docs/metrics.md). A mask on another grid is "
+      "resampled onto the truth's in physical space.");
+  m.def(
+      "compare_mesh",
+      [](const geometry::TriangleMesh& surface, const image::Volume<std::uint8_t>& truth) {
+        segment::SegmentationScores s;
+        {
+          py::gil_scoped_release unlocked;
+          s = segment::compare_mesh_to_mask(surface, truth);
+        }
+        return scores_dict(s);
+      },
+      py::arg("surface"), py::arg("truth"), "compare() for a closed surface, rasterised onto the truth's grid.");
+}
+
+}  // namespace ido::python
