@@ -14,5 +14,7 @@ void bind_volume(pybind11::module_& m);
 void bind_mesh(pybind11::module_& m);
 /// ido.phantom, ido.segment (the balloon), surface_to_mask, compare, compare_mesh.
 void bind_segment(pybind11::module_& m);
+/// ido.World (the simulation library), beam and sphere generators, ido.Scene / load_scene.
+void bind_sim(pybind11::module_& m);
 
 }  // namespace ido::python

@@ -13,7 +13,8 @@ namespace py = pybind11;
 PYBIND11_MODULE(ido, m) {
   m.doc() =
       "ido: computer-assisted surgery toolkit (Turini et al. 2007) — volumes and meshes as numpy arrays, balloon "
-      "segmentation, phantoms and accuracy metrics, marching cubes and tetrahedral meshing.";
+      "segmentation, phantoms and accuracy metrics, marching cubes and tetrahedral meshing, and the deformable-"
+      "objects simulation library (particles, force models, switchable integrators, one call per step).";
   m.attr("__version__") = IDO_VERSION;
   py::register_exception_translator([](std::exception_ptr p) {
     try {
@@ -29,4 +30,5 @@ PYBIND11_MODULE(ido, m) {
   ido::python::bind_volume(m);
   ido::python::bind_mesh(m);
   ido::python::bind_segment(m);
+  ido::python::bind_sim(m);
 }
