@@ -20,8 +20,6 @@
 #include "ido/core/error.h"
 #include "ido/io/mesh_io.h"
 #include "ido/io/volume_io.h"
-#include "ido/geometry/mesh_checks.h"
-#include "ido/geometry/self_intersection.h"
 #include "ido/segment/balloon.h"
 #include "ido/segment/calcification.h"
 #include "ido/viz/renderer.h"
@@ -220,18 +218,8 @@ void run(const SegmentCliOptions& o, const GlobalOptions& g) {
   }
   std::optional<segment::CalcificationResult> calcified;
   if (o.calcium) {
-    const double band_top = result->report.model.reference + result->report.model.tolerance;
-    if (!result->report.model.accept_brighter && *o.calcium <= band_top)
-      throw InvalidInput(fmt::format("--calcium {:g} lies inside the lumen's accepted band (up to {:g}): give a "
-                                     "threshold above it, or contrast would count as plaque",
-                                     *o.calcium, band_top));
     report(progress.get(), 0.95, "calcification");
-    calcified = segment::add_calcification(result->surface, ct,
-                                           {.threshold = *o.calcium, .max_reach_mm = o.calcium_reach_mm});
-    // The report describes the surface written: recount it.
-    result->surface = calcified->surface;
-    segment::set_surface_figures(result->report, geometry::check_mesh(result->surface),
-                                 static_cast<std::int64_t>(geometry::self_intersections(result->surface).size()));
+    calcified = segment::add_calcification(*result, ct, {.threshold = *o.calcium, .max_reach_mm = o.calcium_reach_mm});
   }
   const segment::BalloonResult& r = *result;
   nlohmann::json snapshot_steps = nlohmann::json::array();

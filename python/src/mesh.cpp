@@ -14,6 +14,7 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include "arrays.h"
 #include "bindings.h"
 #include "ido/core/error.h"
 #include "ido/geometry/mesh_checks.h"
@@ -29,7 +30,6 @@ namespace py = pybind11;
 namespace ido::python {
 namespace {
 
-using Points = py::array_t<double, py::array::c_style | py::array::forcecast>;
 using Cells = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>;
 
 /// A read-only numpy view of @p rows rows of @p cols values at @p data, kept alive by @p owner.
@@ -40,18 +40,6 @@ py::array_t<T> rows_view(const T* data, std::size_t rows, py::ssize_t cols, cons
                                : py::array_t<T>({py::ssize_t(rows), cols}, {cols * s, s}, data, owner);
   a.attr("setflags")(py::arg("write") = false);
   return a;
-}
-
-std::vector<Vec3> points_from_array(const Points& a, const char* what) {
-  if (a.ndim() != 2 || a.shape(1) != 3)
-    throw InvalidInput(std::string(what) + ": expected an array of shape (n, 3)");
-  std::vector<Vec3> out(std::size_t(a.shape(0)));
-  const double* p = a.data();
-  for (std::size_t i = 0; i < out.size(); ++i) {
-    out[i] = Vec3(p[3 * i], p[3 * i + 1], p[3 * i + 2]);
-    if (!out[i].allFinite()) throw InvalidInput(std::string(what) + ": row " + std::to_string(i) + " is not finite");
-  }
-  return out;
 }
 
 /// Rows of @p N vertex indices, each in [0, vertex_count).
@@ -70,11 +58,6 @@ std::vector<std::array<std::int32_t, N>> cells_from_array(const Cells& a, std::s
       out[i][c] = std::int32_t(v);
     }
   return out;
-}
-
-template <class M, std::size_t N>
-void set_cells(M& mesh, std::vector<std::array<std::int32_t, N>>& cells, const Cells& a, const char* what) {
-  cells = cells_from_array<N>(a, mesh.vertices.size(), what);
 }
 
 py::dict check_dict(const geometry::MeshCheckReport& c) {
@@ -139,7 +122,9 @@ void bind_mesh(py::module_& m) {
             return rows_view<std::int32_t>(t.triangles.empty() ? nullptr : t.triangles.front().data(), t.triangles.size(),
                                            3, self);
           },
-          [](TriangleMesh& t, const Cells& a) { set_cells<TriangleMesh, 3>(t, t.triangles, a, "TriangleMesh triangles"); },
+          [](TriangleMesh& t, const Cells& a) {
+            t.triangles = cells_from_array<3>(a, t.vertices.size(), "TriangleMesh triangles");
+          },
           "Triangles (m, 3) as vertex indices (int32); a read-only view. Assign an array to replace them.")
       .def("__repr__", [](const TriangleMesh& t) {
         return "<ido.TriangleMesh " + std::to_string(t.vertices.size()) + " vertices, " +

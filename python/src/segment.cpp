@@ -13,8 +13,6 @@
 
 #include "bindings.h"
 #include "ido/core/error.h"
-#include "ido/geometry/mesh_checks.h"
-#include "ido/geometry/self_intersection.h"
 #include "ido/segment/balloon.h"
 #include "ido/segment/calcification.h"
 #include "ido/segment/metrics.h"
@@ -42,9 +40,6 @@ BalloonOptions balloon_options(const SegmentArgs& a) {
   if (a.tolerance && !(*a.tolerance > 0 && std::isfinite(*a.tolerance)))
     throw InvalidInput("tolerance must be positive and finite, got " + std::to_string(*a.tolerance));
   if (a.reference && !std::isfinite(*a.reference)) throw InvalidInput("reference must be finite");
-  if (!(a.edge_reach_voxels >= 0) || !std::isfinite(a.edge_reach_voxels))
-    throw InvalidInput("edge_reach_voxels must be 0 (no limit) or a positive number of voxels, got " +
-                       std::to_string(a.edge_reach_voxels));
   if (a.max_iterations < 1) throw InvalidInput("max_iterations must be at least 1");
   BalloonOptions bo;
   bo.reference = a.reference;
@@ -128,21 +123,6 @@ py::dict scores_dict(const segment::SegmentationScores& s) {
   return d;
 }
 
-/// Adds calcified plaque above @p threshold to @p result (as `ido segment --calcium`).
-void add_plaque(BalloonResult& result, const image::Volume<float>& ct, double threshold, double reach_mm) {
-  if (!std::isfinite(threshold)) throw InvalidInput("calcium must be a finite intensity");
-  if (!(reach_mm > 0) || !std::isfinite(reach_mm))
-    throw InvalidInput("calcium_reach_mm must be a positive length in mm, got " + std::to_string(reach_mm));
-  const double band_top = result.report.model.reference + result.report.model.tolerance;
-  if (!result.report.model.accept_brighter && threshold <= band_top)
-    throw InvalidInput("calcium " + std::to_string(threshold) + " lies inside the lumen's accepted band (up to " +
-                       std::to_string(band_top) + "): give a threshold above it");
-  auto c = segment::add_calcification(result.surface, ct, {.threshold = threshold, .max_reach_mm = reach_mm});
-  result.surface = std::move(c.surface);
-  segment::set_surface_figures(result.report, geometry::check_mesh(result.surface),
-                               static_cast<std::int64_t>(geometry::self_intersections(result.surface).size()));
-}
-
 }  // namespace
 
 void bind_segment(py::module_& m) {
@@ -173,7 +153,7 @@ void bind_segment(py::module_& m) {
         const std::vector<Vec3> points = seed_points(ct, seeds, seed_voxels);
         py::gil_scoped_release unlocked;
         BalloonResult r = segment::segment_balloon(ct, points, bo);
-        if (calcium) add_plaque(r, ct, *calcium, calcium_reach_mm);
+        if (calcium) (void)segment::add_calcification(r, ct, {.threshold = *calcium, .max_reach_mm = calcium_reach_mm});
         return r;
       },
       py::arg("ct"), py::arg("seeds") = std::vector<Vec3>{},

@@ -16,6 +16,7 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include "arrays.h"
 #include "bindings.h"
 #include "ido/core/error.h"
 #include "ido/io/scene.h"
@@ -34,26 +35,12 @@ namespace ido::python {
 namespace {
 
 using sim::World;
-using Points = py::array_t<double, py::array::c_style | py::array::forcecast>;
 
-py::array_t<double> to_array(const std::vector<Vec3>& v) {
-  py::array_t<double> out({py::ssize_t(v.size()), py::ssize_t(3)});
-  auto w = out.mutable_unchecked<2>();
-  for (std::size_t i = 0; i < v.size(); ++i)
-    for (int c = 0; c < 3; ++c) w(py::ssize_t(i), c) = v[i][c];
-  return out;
-}
-
-/// Copies @p a, shape (n, 3) with n = the world's particle count, into @p dst.
-void from_array(std::vector<Vec3>& dst, const Points& a, const char* what) {
+/// Replaces @p dst by the rows of @p a, which must be (n, 3) with n = dst.size().
+void assign_points(std::vector<Vec3>& dst, const Points& a, const char* what) {
   if (a.ndim() != 2 || a.shape(1) != 3 || std::size_t(a.shape(0)) != dst.size())
     throw InvalidInput(std::string(what) + ": expected an array of shape (" + std::to_string(dst.size()) + ", 3)");
-  auto r = a.unchecked<2>();
-  for (std::size_t i = 0; i < dst.size(); ++i) {
-    const Vec3 p(r(py::ssize_t(i), 0), r(py::ssize_t(i), 1), r(py::ssize_t(i), 2));
-    if (!p.allFinite()) throw InvalidInput(std::string(what) + ": row " + std::to_string(i) + " is not finite");
-    dst[i] = p;
-  }
+  dst = points_from_array(a, what);
 }
 
 /// The tetrahedra of @p mesh as particle indices (vertex v is particle first_particle + v).
@@ -130,12 +117,12 @@ void bind_sim(py::module_& m) {
           py::arg("first_particle") = 0, "Springs along the mesh's edges (mass-spring). Returns the model's index.")
       .def_property_readonly("particle_count", [](const World& w) { return w.particles().size(); })
       .def_property(
-          "positions", [](const World& w) { return to_array(w.particles().positions()); },
-          [](World& w, const Points& a) { from_array(w.particles().positions(), a, "positions"); },
+          "positions", [](const World& w) { return points_to_array(w.particles().positions()); },
+          [](World& w, const Points& a) { assign_points(w.particles().positions(), a, "positions"); },
           "Particle positions (n, 3), mm: a copy; assign an array of the same shape to move them.")
       .def_property(
-          "velocities", [](const World& w) { return to_array(w.particles().velocities()); },
-          [](World& w, const Points& a) { from_array(w.particles().velocities(), a, "velocities"); },
+          "velocities", [](const World& w) { return points_to_array(w.particles().velocities()); },
+          [](World& w, const Points& a) { assign_points(w.particles().velocities(), a, "velocities"); },
           "Particle velocities (n, 3), mm/s: a copy; assignable.")
       .def_property_readonly(
           "masses",
@@ -213,7 +200,7 @@ void bind_sim(py::module_& m) {
           "accelerations",
           [](World& w) {
             w.compute_forces();
-            return to_array(w.accelerations());
+            return points_to_array(w.accelerations());
           },
           "Computes the forces at the present state and returns the accelerations (n, 3), mm/s².")
       .def(

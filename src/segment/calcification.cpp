@@ -15,6 +15,7 @@
 
 #include "ido/core/error.h"
 #include "ido/core/parallel.h"
+#include "ido/geometry/mesh_checks.h"
 #include "ido/geometry/mesh_topology.h"
 #include "ido/geometry/self_intersection.h"
 #include "ido/image/filters.h"
@@ -206,6 +207,22 @@ CalcificationResult add_calcification(const geometry::TriangleMesh &lumen, const
   // The marching-cubes level is free of self-intersections by construction; the remesher's
   // moves are not checked against distant parts, so keep the level when they met.
   if (geometry::has_self_intersections(out.surface)) out.surface = level;
+  return out;
+}
+
+CalcificationResult add_calcification(BalloonResult &result, const image::Volume<float> &ct,
+                                      const CalcificationOptions &options) {
+  const IntensityModel &model = result.report.model;
+  const double band_top = model.reference + model.tolerance;
+  if (!model.accept_brighter && options.threshold <= band_top)
+    throw InvalidInput(fmt::format("calcification: the threshold {:g} lies inside the lumen's accepted band (up to "
+                                   "{:g}): give a threshold above it, or contrast would count as plaque",
+                                   options.threshold, band_top));
+  CalcificationResult out = add_calcification(result.surface, ct, options);
+  result.surface = std::move(out.surface);
+  out.surface = {};
+  set_surface_figures(result.report, geometry::check_mesh(result.surface),
+                      static_cast<std::int64_t>(geometry::self_intersections(result.surface).size()));
   return out;
 }
 

@@ -4,6 +4,7 @@
 
 #include "ido/geometry/triangle_mesh.h"
 #include "ido/image/volume.h"
+#include "ido/segment/balloon.h"
 
 namespace ido::segment {
 
@@ -49,5 +50,15 @@ struct CalcificationResult {
 /// threshold, or a reach ≤ 0.
 [[nodiscard]] CalcificationResult add_calcification(const geometry::TriangleMesh &lumen, const image::Volume<float> &ct,
                                                     const CalcificationOptions &options);
+
+/// add_calcification() on a balloon's result: result.surface becomes lumen ∪ plaque and
+/// result.report's surface figures (volume, V/E/F, Euler characteristic, flags,
+/// self-intersections) are recounted for it. Returns the plaque figures; the returned
+/// surface is empty (it is in result.surface).
+/// @throws ido::InvalidInput when options.threshold lies inside the lumen's accepted band
+/// (at or below reference + tolerance of result.report.model, unless it accepts anything
+/// brighter): contrast would count as plaque; as add_calcification() otherwise.
+CalcificationResult add_calcification(BalloonResult &result, const image::Volume<float> &ct,
+                                      const CalcificationOptions &options);
 
 }  // namespace ido::segment
