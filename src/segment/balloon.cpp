@@ -109,6 +109,7 @@ struct Balloon::State {
   image::Volume<float> gradient_mm;  // |∇ smoothed| (intensity per mm), the vessels' edge stop
   IntensityModel model;
   double h = 1.0;  // smallest spacing (mm)
+  std::vector<Vec3> seeds_mm;  // a repair keeps the components holding one of them
   sim::Particles particles;
   std::vector<Tri> triangles;
   std::int64_t iteration = 0;
@@ -261,6 +262,7 @@ struct Balloon::State {
     ro.grid_spacing_mm = h;
     ro.target_edge_mm = opt.edge_length_voxels * h;
     ro.min_component_volume_mm3 = 2.0 * h * h * h;
+    ro.keep_points_mm = seeds_mm;
     ro.remesh = do_remesh;
     ro.threaded = opt.threaded;
     const geometry::TriangleMesh repaired = repair_topology(mesh(), pairs, ro);
@@ -586,6 +588,7 @@ Balloon::Balloon(const image::Volume<float>& ct, const std::vector<Vec3>& seeds_
     throw InvalidInput("balloon: edge_reach_voxels must be 0 (no limit) or positive");
   m->opt = options;
   m->h = ct.spacing().minCoeff();
+  m->seeds_mm = seeds_mm;
   image::GaussianOptions go;
   m->smoothed = image::gaussian_smooth(ct, options.smoothing_sigma_voxels * m->h, go);
   for (const Vec3& s : seeds_mm) {

@@ -23,6 +23,7 @@
 #include "ido/meshing/remesh.h"
 #include "ido/meshing/signed_distance.h"
 #include "ido/segment/balloon.h"
+#include "ido/segment/topology_repair.h"
 
 namespace ido::segment {
 namespace {
@@ -95,23 +96,6 @@ image::Volume<std::uint8_t> grow_plaque(const image::Volume<std::uint8_t> &lumen
   return plaque;
 }
 
-/// @p mesh without the components enclosing less than @p min_volume_mm3: specks where a
-/// single grid point of the union's field dips below zero.
-geometry::TriangleMesh without_specks(const geometry::TriangleMesh& mesh, double min_volume_mm3) {
-  const std::vector<std::int32_t> component = geometry::triangle_components(mesh);
-  std::vector<double> volume;
-  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
-    const auto c = static_cast<std::size_t>(component[t]);
-    if (c >= volume.size()) volume.resize(c + 1, 0.0);
-    const Tri& f = mesh.triangles[t];
-    volume[c] += mesh.vertices[f[0]].dot(mesh.vertices[f[1]].cross(mesh.vertices[f[2]])) / 6.0;
-  }
-  geometry::TriangleMesh out;
-  out.vertices = mesh.vertices;
-  for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
-    if (volume[static_cast<std::size_t>(component[t])] >= min_volume_mm3) out.triangles.push_back(mesh.triangles[t]);
-  return geometry::without_unused_vertices(std::move(out));
-}
 
 }  // namespace
 
@@ -198,8 +182,8 @@ CalcificationResult add_calcification(const geometry::TriangleMesh &lumen, const
   // Pieces of plaque are joined to the lumen (bridges above), so a separate component smaller
   // than min_voxels voxels can only be a speck of the field.
   const geometry::TriangleMesh level =
-      without_specks(meshing::marching_cubes(field, {.iso_value = 0.0f, .threaded = o.threaded}),
-                     double(std::max<std::int64_t>(o.min_voxels, 1)) * ct.spacing().prod());
+      keep_components(meshing::marching_cubes(field, {.iso_value = 0.0f, .threaded = o.threaded}),
+                      double(std::max<std::int64_t>(o.min_voxels, 1)) * ct.spacing().prod());
   meshing::RemeshOptions ro;
   ro.target_edge_mm = h;
   ro.iterations = 3;

@@ -6,55 +6,62 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numeric>
-#include <unordered_map>
 
 #include "ido/core/error.h"
+#include "ido/core/math.h"
 #include "ido/core/parallel.h"
+#include "ido/geometry/mesh_topology.h"
 #include "ido/geometry/self_intersection.h"
+#include "ido/geometry/winding_number.h"
 #include "ido/meshing/marching_cubes.h"
 #include "ido/meshing/remesh.h"
 #include "ido/meshing/signed_distance.h"
 
 namespace ido::segment {
 
-namespace {
-
-// Keeps the connected components whose enclosed volume reaches min_volume.
-geometry::TriangleMesh drop_small_components(const geometry::TriangleMesh& mesh, double min_volume) {
-  const auto nv = static_cast<std::int32_t>(mesh.vertices.size());
-  std::vector<std::int32_t> parent(mesh.vertices.size());
-  std::iota(parent.begin(), parent.end(), 0);
-  auto find = [&](std::int32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
-  for (const Tri& t : mesh.triangles) {
-    parent[find(t[0])] = find(t[1]);
-    parent[find(t[1])] = find(t[2]);
+geometry::TriangleMesh keep_components(const geometry::TriangleMesh& mesh, double min_volume_mm3,
+                                       const std::vector<Vec3>& keep_points_mm) {
+  const std::vector<std::int32_t> component = geometry::triangle_components(mesh);
+  std::size_t nc = 0;
+  for (std::int32_t c : component) nc = std::max(nc, std::size_t(c) + 1);
+  std::vector<double> volume(nc, 0.0);
+  // winding[c · P + q]: component c's winding number at point q (Σ solid angles / 4π).
+  const std::size_t np = keep_points_mm.size();
+  std::vector<double> winding(nc * np, 0.0);
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const auto c = std::size_t(component[t]);
+    const Vec3 &a = mesh.vertices[mesh.triangles[t][0]], &b = mesh.vertices[mesh.triangles[t][1]],
+               &d = mesh.vertices[mesh.triangles[t][2]];
+    volume[c] += a.dot(b.cross(d)) / 6.0;
+    for (std::size_t q = 0; q < np; ++q) winding[c * np + q] += geometry::solid_angle(keep_points_mm[q], a, b, d);
   }
-  std::unordered_map<std::int32_t, double> volume;
-  for (const Tri& t : mesh.triangles)
-    volume[find(t[0])] += mesh.vertices[t[0]].dot(mesh.vertices[t[1]].cross(mesh.vertices[t[2]])) / 6.0;
+  std::vector<std::uint8_t> keep(nc, 0), holds(nc, 0);
+  bool any_holds = false;
+  for (std::size_t c = 0; c < nc; ++c) {
+    keep[c] = volume[c] >= min_volume_mm3 ? 1 : 0;
+    for (std::size_t q = 0; q < np; ++q) holds[c] |= winding[c * np + q] / (4.0 * kPi) > 0.5 ? 1 : 0;
+    any_holds |= keep[c] && holds[c];
+  }
+  if (any_holds)
+    for (std::size_t c = 0; c < nc; ++c) keep[c] &= holds[c];
+  // Vertices renumbered in order of first use by a kept triangle.
   geometry::TriangleMesh out;
   std::vector<std::int32_t> remap(mesh.vertices.size(), -1);
-  for (const Tri& t : mesh.triangles) {
-    if (volume[find(t[0])] < min_volume) continue;
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    if (!keep[std::size_t(component[t])]) continue;
     Tri nt;
     for (int k = 0; k < 3; ++k) {
-      if (remap[t[k]] < 0) {
-        remap[t[k]] = static_cast<std::int32_t>(out.vertices.size());
-        out.vertices.push_back(mesh.vertices[t[k]]);
+      const std::int32_t v = mesh.triangles[t][k];
+      if (remap[std::size_t(v)] < 0) {
+        remap[std::size_t(v)] = static_cast<std::int32_t>(out.vertices.size());
+        out.vertices.push_back(mesh.vertices[std::size_t(v)]);
       }
-      nt[k] = remap[t[k]];
+      nt[k] = remap[std::size_t(v)];
     }
     out.triangles.push_back(nt);
   }
-  (void)nv;
   return out;
 }
-
-}  // namespace
 
 geometry::TriangleMesh repair_topology(
     const geometry::TriangleMesh& mesh,
@@ -80,7 +87,8 @@ geometry::TriangleMesh repair_topology(
   }
   const image::Volume<float> field = meshing::signed_distance(mesh, grid, sd);
   geometry::TriangleMesh level = meshing::marching_cubes(field, {.iso_value = 0.0f, .threaded = options.threaded});
-  if (options.min_component_volume_mm3 > 0) level = drop_small_components(level, options.min_component_volume_mm3);
+  if (options.min_component_volume_mm3 > 0 || !options.keep_points_mm.empty())
+    level = keep_components(level, options.min_component_volume_mm3, options.keep_points_mm);
   if (level.triangles.empty() || !options.remesh) return level;
   meshing::RemeshOptions ro;
   ro.target_edge_mm = options.target_edge_mm;

@@ -452,6 +452,46 @@ TEST(TopologyRepair, MergesOverlapsIntoAValidSurfaceOfTheRightTopology) {
   EXPECT_THROW((void)repair_topology(geometry::TriangleMesh{}, {}, ro), InvalidInput);
 }
 
+// A repair keeps what holds the seeds: of three disjoint spheres (one holding a seed, one
+// holding none, one too small) only the seeded one stays; with no seed inside any, every
+// sphere above the volume floor stays; an inward-facing sphere (a cavity) has negative
+// volume and goes with the floor. Kept vertices are renumbered in order of first use.
+TEST(TopologyRepair, KeepsTheComponentsHoldingASeed) {
+  const auto three = union_of_spheres({Vec3(0, 0, 0), Vec3(20, 0, 0)}, 4.0);
+  geometry::TriangleMesh m = three;
+  {
+    const auto small = balloon_icosphere(Vec3(-20, 0, 0), 0.5, 2);
+    const auto base = static_cast<std::int32_t>(m.vertices.size());
+    m.vertices.insert(m.vertices.end(), small.vertices.begin(), small.vertices.end());
+    for (const Tri& t : small.triangles) m.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+  }
+  const double floor = 1.0;  // mm³: the r 0.5 sphere encloses ≈ 0.5
+  const auto seeded = keep_components(m, floor, {Vec3(20.5, 0.3, -0.2)});
+  auto c = geometry::check_mesh(seeded);
+  EXPECT_EQ(c.components, 1);
+  EXPECT_EQ(c.euler_characteristic, 2);
+  for (const Vec3& v : seeded.vertices) EXPECT_NEAR((v - Vec3(20, 0, 0)).norm(), 4.0, 1e-9);  // the sphere at x = 20
+  EXPECT_EQ(seeded.triangles.size(), three.triangles.size() / 2);
+  EXPECT_EQ(seeded.vertices.size(), three.vertices.size() / 2);
+  // No component holds the point: the floor alone decides.
+  const auto unseeded = keep_components(m, floor, {Vec3(10, 0, 0)});
+  c = geometry::check_mesh(unseeded);
+  EXPECT_EQ(c.components, 2);
+  EXPECT_EQ(unseeded.triangles.size(), three.triangles.size());
+  EXPECT_EQ(unseeded.vertices.size(), three.vertices.size());
+  // A cavity: the inner sphere turned inward, inside the seeded sphere.
+  geometry::TriangleMesh hollow = union_of_spheres({Vec3(0, 0, 0)}, 6.0);
+  {
+    const auto inner = balloon_icosphere(Vec3(0, 0, 0), 2.0, 2);
+    const auto base = static_cast<std::int32_t>(hollow.vertices.size());
+    hollow.vertices.insert(hollow.vertices.end(), inner.vertices.begin(), inner.vertices.end());
+    for (const Tri& t : inner.triangles) hollow.triangles.push_back({t[0] + base, t[2] + base, t[1] + base});
+  }
+  const auto filled = keep_components(hollow, floor, {Vec3(4, 0, 0)});
+  EXPECT_EQ(geometry::check_mesh(filled).components, 1);
+  EXPECT_GT(geometry::check_mesh(filled).signed_volume_mm3, 4.0 / 3.0 * kPi * 5.9 * 5.9 * 5.9);
+}
+
 // The repair's signed distance evaluates the winding number only within about a grid spacing
 // of the surface (and near uncounted triangles) and takes every other sign from a neighbour
 // or a connected component. The full path — the winding number at every grid point, the

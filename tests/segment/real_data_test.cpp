@@ -29,14 +29,13 @@ struct RealCase {
   bool level_set;         // reference is inside where < 0 (else label > 0.5)
   Vec3 seed_mm;           // from the data README
   bool roi;               // use the reference bbox grown by 10 mm
-  bool extended;          // slow (> ~60 s): run only with IDO_REQUIRE_REAL_ACCURACY=1
   double edge_reach = 0;  // BalloonOptions::edge_reach_voxels (0 = the default, no limit)
 };
 
 const RealCase kCtpa{"ctpa", "ctpa/ct.nii.gz", "ctpa/pulmonary_artery.nii.gz", false, Vec3(33.34, -186.66, 693.20),
-                     false, false};
+                     false};
 const RealCase kCtpaReach2{"ctpa_reach2", "ctpa/ct.nii.gz", "ctpa/pulmonary_artery.nii.gz", false,
-                           Vec3(33.34, -186.66, 693.20), false, false, 2.0};
+                           Vec3(33.34, -186.66, 693.20), false, 2.0};
 
 image::Volume<std::uint8_t> reference_mask(const image::Volume<float>& ref, bool level_set) {
   auto m = ref.like<std::uint8_t>(0);
@@ -107,16 +106,10 @@ Outcome outcome(const RealCase& c) {
 
 class RealData : public ::testing::TestWithParam<RealCase> {};
 
-// Cases slower than about a minute on the 2-core CI machine run only on request.
-#define IDO_SKIP_UNLESS_ENABLED(c)                                                       \
-  if ((c).extended && !requires_accuracy())                                              \
-  GTEST_SKIP() << (c).name << " takes minutes; set IDO_REQUIRE_REAL_ACCURACY=1 to run it"
-
 // Whatever the score, the output must be a valid surface with the topology it reports.
 TEST_P(RealData, ValidSurface) {
   IDO_REQUIRE_SHARED_DATA();
   const RealCase c = GetParam();
-  IDO_SKIP_UNLESS_ENABLED(c);
   const Outcome o = outcome(c);
   const auto m = geometry::check_mesh(o.surface);
   EXPECT_TRUE(m.closed);
@@ -132,7 +125,6 @@ TEST_P(RealData, ValidSurface) {
 TEST_P(RealData, AccuracyTarget) {
   IDO_REQUIRE_SHARED_DATA();
   const RealCase c = GetParam();
-  IDO_SKIP_UNLESS_ENABLED(c);
   const Outcome o = outcome(c);
   RecordProperty("dice", std::to_string(o.scores.dice));
   RecordProperty("hd95_mm", std::to_string(o.scores.hd95_mm));
@@ -148,11 +140,11 @@ INSTANTIATE_TEST_SUITE_P(
     Scans, RealData,
     ::testing::Values(
         RealCase{"vmtk_aorta", "vmtk-aorta/aorta.mha", "vmtk-aorta/aorta-reference-levelset.mha", true,
-                 Vec3(-219.73, -174.90, 21.00), false, true},
+                 Vec3(-219.73, -174.90, 21.00), false},
         kCtpa, kCtpaReach2,
-        RealCase{"ctpa_roi", "ctpa/ct.nii.gz", "ctpa/pulmonary_artery.nii.gz", false, Vec3(33.34, -186.66, 693.20), true, true},
+        RealCase{"ctpa_roi", "ctpa/ct.nii.gz", "ctpa/pulmonary_artery.nii.gz", false, Vec3(33.34, -186.66, 693.20), true},
         RealCase{"abdomen_dicom", "abdomen-dicom/series", "abdomen-dicom/aorta.nii.gz", false,
-                 Vec3(7.32, -145.52, -782.50), false, false}),
+                 Vec3(7.32, -145.52, -782.50), false}),
     [](const ::testing::TestParamInfo<RealCase>& param_info) { return param_info.param.name; });
 
 // The edge stage's reach (`--edge-reach 2`): without it the stage follows ctpa's distal
@@ -179,8 +171,7 @@ TEST(RealDataReach, CtpaEdgeReachKeepsToTheReferencesArteries) {
 TEST(RealDataSection, VmtkAortaWithinTheReferenceSection) {
   IDO_REQUIRE_SHARED_DATA();
   const RealCase c{"vmtk_aorta", "vmtk-aorta/aorta.mha", "vmtk-aorta/aorta-reference-levelset.mha", true,
-                   Vec3(-219.73, -174.90, 21.00), false, true};
-  IDO_SKIP_UNLESS_ENABLED(c);
+                   Vec3(-219.73, -174.90, 21.00), false};
   const auto dir = *test::shared_data_dir();
   const image::Volume<float> ct = io::read_volume(dir / c.ct);
   const auto truth = reference_mask(io::read_volume(dir / c.reference), c.level_set);

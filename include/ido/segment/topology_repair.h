@@ -17,9 +17,20 @@ struct TopologyRepairOptions {
   /// Components whose enclosed volume is below this (mm³) are dropped (specks left where
   /// the winding number is ambiguous).
   double min_component_volume_mm3 = 0.0;
+  /// Points the result must hold (the balloon's seeds): when some component encloses one of
+  /// them, the components that enclose none are dropped — pieces the repair pinched off the
+  /// balloon. Empty = keep every component (above the volume floor).
+  std::vector<Vec3> keep_points_mm;
   bool remesh = true;  ///< remesh the extracted level to target_edge_mm
   bool threaded = true;
 };
+
+/// The components of the closed surface @p mesh worth keeping: those enclosing at least
+/// @p min_volume_mm3 (signed volume, so inner cavities go too), and, when some such component
+/// encloses a point of @p keep_points_mm (winding number > ½), only the components enclosing
+/// a point. Vertices are renumbered in order of first use; unused ones go.
+[[nodiscard]] geometry::TriangleMesh keep_components(const geometry::TriangleMesh& mesh, double min_volume_mm3,
+                                                     const std::vector<Vec3>& keep_points_mm = {});
 
 /// Rebuilds a self-intersecting closed surface as a non-self-intersecting one with the
 /// topology of the region it encloses (the paper's repair step): a signed distance map on an
