@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: Apache-2.0
 # `make demo`: the whole ido chain on the embedded default, a generated CT phantom of a
-# vertebra next to the aorta, then (when ../shared/data is present) the aorta of a real scan.
+# vertebra next to the aorta, then (when ../shared/data or $IDO_SHARED_DATA is present) the aorta of a real scan.
 # Says where the results and pictures are.
 set -euo pipefail
 ido=${1:-build/release/bin/ido}
@@ -33,9 +33,10 @@ echo "== 3. Format conversions of the results"
 "$ido" convert pipeline/vessel_surface.stl pipeline/vessel_surface.ply
 "$ido" info pipeline/vessel_surface.ply | head -12
 
-shared="$root/../shared/data"
+# The real scans: ../shared/data beside the checkout, or $IDO_SHARED_DATA (as for the tests).
+shared="${IDO_SHARED_DATA:-$root/../shared/data}"
 if [[ -d "$shared/abdomen-dicom/series" ]]; then
-  echo "== 4. A real scan: the abdominal aorta from the DICOM series in ../shared/data"
+  echo "== 4. A real scan: the abdominal aorta from the DICOM series in $shared"
   "$ido" info "$shared/abdomen-dicom/series" | head -6
   # --calcium: the reference counts the calcified wall as aorta; --edge-reach 2: the aorta, not
   # the branch leaving it, which the reference leaves out (docs/segmentation.md)
