@@ -44,6 +44,7 @@ struct SegmentCliOptions {
   double calcium_reach_mm = 4.0;
   int max_iterations = 4000;
   double edge_reach_voxels = 0.0;  // 0: no limit
+  std::optional<double> outside_level;
   std::string snapshots;
   std::int64_t snapshot_every = 0;  // 0: chosen so that a run gives 15–30 pictures
   std::string snapshot_size = "1000x500";
@@ -166,6 +167,8 @@ void run(const SegmentCliOptions& o, const GlobalOptions& g) {
   if (!(o.edge_reach_voxels >= 0) || !std::isfinite(o.edge_reach_voxels))
     throw InvalidInput(fmt::format("--edge-reach must be 0 (no limit) or a positive number of voxels, got {}",
                                    o.edge_reach_voxels));
+  if (o.outside_level && !std::isfinite(*o.outside_level))
+    throw InvalidInput("--outside-level must be a finite intensity");
   const std::string ext = std::filesystem::path(o.output).extension().string();
   if (ext != ".stl" && ext != ".ply" && ext != ".obj" && ext != ".vtp")
     throw InvalidInput(fmt::format("{}: the surface output must be .stl, .ply, .obj or .vtp", o.output));
@@ -201,6 +204,7 @@ void run(const SegmentCliOptions& o, const GlobalOptions& g) {
   if (o.white_noise) bo.estimate.residual_ball_factor = 5.0;
   bo.max_iterations = o.max_iterations;
   bo.edge_reach_voxels = o.edge_reach_voxels;
+  bo.outside_level = o.outside_level;
   if (!o.roi.empty()) bo.roi_mm = parse_roi(o.roi);
   auto progress = make_progress(g.quiet);
   std::vector<KeptSurface> kept;
@@ -258,6 +262,7 @@ void run(const SegmentCliOptions& o, const GlobalOptions& g) {
         {"accept_brighter", rep.model.accept_brighter},
         {"iterations", rep.iterations},
         {"edge_reach_voxels", o.edge_reach_voxels},
+        {"outside_level", o.outside_level ? nlohmann::json(*o.outside_level) : nlohmann::json(nullptr)},
         {"seconds", rep.seconds},
         {"phase_seconds",
          {{"setup", rep.phase_seconds.setup},
@@ -337,6 +342,11 @@ void setup(CLI::App& app, const GlobalOptions& g) {
                   "inflation filled (not creeping along distal branches a reference may leave out), but also "
                   "stops it following vessels thinner than about 2.5 voxels, whose blurred interior the "
                   "inflation rejects");
+  sub->add_option("--outside-level", opts->outside_level,
+                  "level of the tissue bounding the organ (e.g. 40 for a vessel's soft-tissue wall in HU): the wall "
+                  "is placed half-way between the inside and this level where the image goes on beyond it (lung "
+                  "or fat past a wall too thin to resolve), so the surface is the lumen's; unset = half-way to the "
+                  "surroundings' own level");
   sub->add_option("--max-iterations", opts->max_iterations, "safeguard on inflation steps");
   sub->add_option("-o,--output", opts->output, "surface file (.stl .ply .obj .vtp)")->required();
   sub->add_option("--mask", opts->mask, "binary mask on the input grid (1 inside)");

@@ -34,6 +34,7 @@ struct SegmentArgs {
   bool bone = false, white_noise = false;
   double edge_reach_voxels = 0.0;
   int max_iterations = 4000;
+  std::optional<double> outside_level;
 };
 
 BalloonOptions balloon_options(const SegmentArgs& a) {
@@ -47,6 +48,8 @@ BalloonOptions balloon_options(const SegmentArgs& a) {
   bo.accept_brighter = a.bone;
   if (a.white_noise) bo.estimate.residual_ball_factor = 5.0;  // as `ido segment --white-noise`
   bo.edge_reach_voxels = a.edge_reach_voxels;
+  if (a.outside_level && !std::isfinite(*a.outside_level)) throw InvalidInput("outside_level must be finite");
+  bo.outside_level = a.outside_level;
   bo.max_iterations = a.max_iterations;
   if (a.roi) {
     const auto& r = *a.roi;
@@ -140,15 +143,17 @@ void bind_segment(py::module_& m) {
       "world points (mm, LPS); seed_voxels: (i, j, k) indices. reference and tolerance (image units) are "
       "estimated at the seeds when not given. roi = (x0, y0, z0, x1, y1, z1) mm is a safeguard box; bone "
       "accepts anything brighter than the reference; edge_reach_voxels bounds the final snap to the wall "
-      "(0 = no limit); calcium adds plaque brighter than it within calcium_reach_mm of the lumen. Releases "
+      "(0 = no limit); outside_level is the level of the tissue bounding the organ (e.g. 40 HU for a vessel's "
+      "wall: the surface follows the lumen where lung or fat lies beyond the wall); calcium adds plaque brighter than it within calcium_reach_mm of the lumen. Releases "
       "the GIL while it runs. Raises ValueError for bad input.";
   m.def(
       "segment",
       [](const image::Volume<float>& ct, const std::vector<Vec3>& seeds,
          const std::vector<std::array<std::int64_t, 3>>& seed_voxels, std::optional<double> reference,
          std::optional<double> tolerance, std::optional<std::array<double, 6>> roi, bool bone, bool white_noise,
-         double edge_reach_voxels, int max_iterations, std::optional<double> calcium, double calcium_reach_mm) {
-        const SegmentArgs a{reference, tolerance, roi, bone, white_noise, edge_reach_voxels, max_iterations};
+         double edge_reach_voxels, int max_iterations, std::optional<double> calcium, double calcium_reach_mm,
+         std::optional<double> outside_level) {
+        const SegmentArgs a{reference, tolerance, roi, bone, white_noise, edge_reach_voxels, max_iterations, outside_level};
         const BalloonOptions bo = balloon_options(a);
         const std::vector<Vec3> points = seed_points(ct, seeds, seed_voxels);
         py::gil_scoped_release unlocked;
@@ -160,7 +165,8 @@ void bind_segment(py::module_& m) {
       py::arg("seed_voxels") = std::vector<std::array<std::int64_t, 3>>{}, py::kw_only(),
       py::arg("reference") = py::none(), py::arg("tolerance") = py::none(), py::arg("roi") = py::none(),
       py::arg("bone") = false, py::arg("white_noise") = false, py::arg("edge_reach_voxels") = 0.0,
-      py::arg("max_iterations") = 4000, py::arg("calcium") = py::none(), py::arg("calcium_reach_mm") = 4.0, seg_doc);
+      py::arg("max_iterations") = 4000, py::arg("calcium") = py::none(), py::arg("calcium_reach_mm") = 4.0,
+      py::arg("outside_level") = py::none(), seg_doc);
 
   py::class_<segment::Balloon>(m, "Balloon",
                                "The balloon driven step by step: step() inflates once, surface shows the current "
@@ -169,8 +175,10 @@ void bind_segment(py::module_& m) {
       .def(py::init([](const image::Volume<float>& ct, const std::vector<Vec3>& seeds,
                        const std::vector<std::array<std::int64_t, 3>>& seed_voxels, std::optional<double> reference,
                        std::optional<double> tolerance, std::optional<std::array<double, 6>> roi, bool bone,
-                       bool white_noise, double edge_reach_voxels, int max_iterations) {
-             const SegmentArgs a{reference, tolerance, roi, bone, white_noise, edge_reach_voxels, max_iterations};
+                       bool white_noise, double edge_reach_voxels, int max_iterations,
+                       std::optional<double> outside_level) {
+             const SegmentArgs a{reference,      tolerance, roi, bone, white_noise, edge_reach_voxels,
+                                 max_iterations, outside_level};
              const BalloonOptions bo = balloon_options(a);
              const std::vector<Vec3> points = seed_points(ct, seeds, seed_voxels);
              py::gil_scoped_release unlocked;
@@ -180,7 +188,7 @@ void bind_segment(py::module_& m) {
            py::arg("seed_voxels") = std::vector<std::array<std::int64_t, 3>>{}, py::kw_only(),
            py::arg("reference") = py::none(), py::arg("tolerance") = py::none(), py::arg("roi") = py::none(),
            py::arg("bone") = false, py::arg("white_noise") = false, py::arg("edge_reach_voxels") = 0.0,
-           py::arg("max_iterations") = 4000)
+           py::arg("max_iterations") = 4000, py::arg("outside_level") = py::none())
       .def(
           "step",
           [](segment::Balloon& b) {

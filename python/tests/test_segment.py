@@ -79,6 +79,8 @@ def test_bad_arguments_raise_value_error_saying_what():
         ido.segment(p.ct, p.seeds, roi=(10, 10, 10, 0, 20, 20))
     with pytest.raises(ValueError, match="lies inside the lumen"):
         ido.segment(p.ct, p.seeds, calcium=100.0)
+    with pytest.raises(ValueError, match="outside_level"):
+        ido.segment(p.ct, p.seeds, outside_level=float("nan"))
     with pytest.raises(ValueError, match="sphere"):  # the message lists the valid kinds
         ido.phantom("cube")
 
@@ -103,3 +105,17 @@ def test_dicom_series_geometry_matches_the_data_readme(shared_data):
     np.testing.assert_allclose(ct.index_to_world((263, 299, 11)), (7.32, -145.52, -782.50), atol=0.01)
     # The README's aorta is about 177 HU inside.
     assert 120.0 < ct.array[11, 299, 263] < 260.0
+
+
+def test_outside_level_reads_the_ctpa_lumen_to_the_reference(shared_data):
+    # The pulmonary arteries against lung: half-way to soft tissue (40 HU) rather than to the
+    # lung beyond the unresolved wall, as the reference draws them (docs/segmentation.md).
+    ct = ido.read_volume(shared_data / "ctpa" / "ct.nii.gz")
+    truth = ido.read_mask(shared_data / "ctpa" / "pulmonary_artery.nii.gz")
+    seed = [(33.34, -186.66, 693.20)]
+    lung = ido.segment(ct, seed, edge_reach_voxels=2)
+    lumen = ido.segment(ct, seed, edge_reach_voxels=2, outside_level=40.0)
+    scores = [ido.compare(ido.surface_to_mask(r.surface, ct), truth) for r in (lung, lumen)]
+    assert scores[1]["dice"] >= 0.93 > scores[0]["dice"]
+    assert lumen.report["volume_mm3"] < lung.report["volume_mm3"]
+    assert lumen.report["closed"] and lumen.report["self_intersections"] == 0

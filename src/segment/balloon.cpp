@@ -426,7 +426,8 @@ struct Balloon::State {
             }
             if (searched[i] != 2) {
               searched[i] = 1;
-              t = edge_offset_along_normal(smoothed, x[i], nrm, model, search, 0.2 * h, min_rise, h, background_departure);
+              t = edge_offset_along_normal(smoothed, x[i], nrm, model, search, 0.2 * h, min_rise, h, background_departure,
+                                           opt.outside_level);
               if (t && model.accept_brighter) {
                 // Bone: the outer fall of a thin cortex that the blur has lowered is read by the
                 // three-plateau fit (marrow, cortex, surroundings), not at the half-way level.
@@ -586,6 +587,8 @@ Balloon::Balloon(const image::Volume<float>& ct, const std::vector<Vec3>& seeds_
     throw InvalidInput("balloon: the region of interest must have min < max on every axis");
   if (!(options.edge_reach_voxels >= 0) || !std::isfinite(options.edge_reach_voxels))
     throw InvalidInput("balloon: edge_reach_voxels must be 0 (no limit) or positive");
+  if (options.outside_level && !std::isfinite(*options.outside_level))
+    throw InvalidInput("balloon: outside_level must be a finite number");
   m->opt = options;
   m->h = ct.spacing().minCoeff();
   m->seeds_mm = seeds_mm;

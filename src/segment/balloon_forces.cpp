@@ -122,7 +122,8 @@ double first_transition_limit(const image::Volume<float>& smoothed, const Vec3& 
 std::optional<double> edge_offset_along_normal(const image::Volume<float>& smoothed, const Vec3& p,
                                                const Vec3& normal, const IntensityModel& model,
                                                double search_mm, double step_mm, double min_rise_per_mm,
-                                               double window_mm, double background_departure) {
+                                               double window_mm, double background_departure,
+                                               std::optional<double> outside_level) {
   // Rise over a window: (D(t + w/2) − D(t − w/2)) / w with D = |I − reference|. With a
   // window of about a voxel the rise of a trilinearly interpolated image is continuous and
   // peaked, so its maximum locates the wall to a fraction of a voxel (a one-sample
@@ -194,6 +195,12 @@ std::optional<double> edge_offset_along_normal(const image::Volume<float>& smoot
     double after = d_out;
     for (int s = s_out; s <= reach; ++s) after = std::min(after, outward[std::size_t(s)]);
     if (d_out - after > model.tolerance) d_out = background_departure;
+  }
+  if (outside_level && !model.accept_brighter) {
+    // The organ's bounding tissue: the outside level goes no further than it on its side.
+    const double beyond = smoothed.sample(p + normal * (tc + s_out * step_mm)) - model.reference;
+    const double bound = *outside_level - model.reference;
+    if (beyond * bound > 0) d_out = std::min(d_out, std::abs(bound));
   }
   const double half = 0.5 * (d_in + d_out);
   double wall = tc;

@@ -167,6 +167,34 @@ TEST(EdgeOffset, ValleyToBrightNeighbourIsReadAgainstTheSurroundingsLevel) {
   }
 }
 
+TEST(EdgeOffset, OutsideLevelReadsTheLumenAgainstAThinWall) {
+  // Lumen (540) up to x = 10, a wall of soft tissue (40) 0.7 voxel thin, lung (−800) beyond,
+  // blurred by σ = 1 voxel (CT pulmonary angiography at 1.5 mm). The wall is not resolved:
+  // the profile falls from the lumen straight towards the lung. Half-way to the lung's level
+  // (−130) lies at x = 10.45, outside the lumen's edge; half-way to the wall's level (290),
+  // which --outside-level 40 asks for, lies at x = 9.50, inside it (analytic crossings).
+  const auto v = blurred_layers({10.0, 10.7}, {540, 40, -800}, 1.0);
+  const IntensityModel m{540, 60};
+  for (double x0 : {9.4, 9.8, 10.2}) {
+    const Vec3 p(x0, 1.5, 1.5);
+    const auto lung = edge_offset_along_normal(v, p, Vec3::UnitX(), m, 2.0, 0.2, 0.25 * 60, 1.0);
+    const auto wall = edge_offset_along_normal(v, p, Vec3::UnitX(), m, 2.0, 0.2, 0.25 * 60, 1.0, 0.0, 40.0);
+    ASSERT_TRUE(lung && wall) << x0;
+    EXPECT_TRUE(test::near(x0 + *lung, 10.45, 0.1)) << x0 << " -> " << x0 + *lung;
+    EXPECT_TRUE(test::near(x0 + *wall, 9.50, 0.1)) << x0 << " -> " << x0 + *wall;
+  }
+  // Where the surroundings are the wall's own tissue, or lie on the other side of the
+  // reference (a brighter neighbour), the level changes nothing, bit for bit.
+  for (const auto& [levels, x0] : {std::pair{std::vector<double>{540, 40}, 9.6}, std::pair{std::vector<double>{540, 1500}, 9.6}}) {
+    const auto plain = blurred_layers({10.0}, levels, 1.0);
+    const Vec3 p(x0, 1.5, 1.5);
+    const auto a = edge_offset_along_normal(plain, p, Vec3::UnitX(), m, 2.0, 0.2, 0.25 * 60, 1.0);
+    const auto b = edge_offset_along_normal(plain, p, Vec3::UnitX(), m, 2.0, 0.2, 0.25 * 60, 1.0, 0.0, 40.0);
+    ASSERT_TRUE(a && b);
+    EXPECT_EQ(*a, *b) << levels[1];
+  }
+}
+
 TEST(EdgeOffset, BrightDepositWithoutGapIsNotACap) {
   // A much brighter deposit directly against the vessel (no gap, no dip): the limit keeps the
   // wall found by the steepest rise.

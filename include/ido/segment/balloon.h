@@ -58,6 +58,14 @@ struct BalloonOptions {
   /// tree phantom's 2-mm twigs), which is also how it follows a real vessel's distal branches
   /// past where a reference stops (ctpa). Measured: docs/segmentation.md.
   double edge_reach_voxels = 0.0;
+  /// The level (image units, e.g. HU) of the tissue bounding the organ, for the edge stage:
+  /// where the intensity beyond the wall goes on past this level (for a vessel: lung or fat
+  /// past a wall of soft tissue too thin to resolve), the wall is placed half-way between the
+  /// inside and this level rather than the far surroundings, i.e. at the lumen's boundary
+  /// (edge_offset_along_normal). Unset (the default): the surroundings' own level. For CT
+  /// vessels, soft tissue (about 40 HU) gives the lumen; leave it unset where the organ is
+  /// meant to include its wall. Measured: docs/segmentation.md.
+  std::optional<double> outside_level;
   /// One-ring averaging passes of the wall offsets found by the edge stage. The per-vertex wall
   /// is noise-limited; 10 passes spread it over about a Gaussian of σ ≈ 2 edge lengths on the
   /// surface (each pass adds ≈ 3/7 ℓ² of variance per axis). Measured: docs/segmentation.md.

@@ -70,11 +70,16 @@ struct BalloonForceWeights {
 /// elsewhere: where the profile beyond the wall is a valley whose floor departs less (it
 /// rises again by more than a tolerance: a brighter neighbour a few voxels out), the
 /// half-way level is taken towards that, not towards the blur-raised floor. 0 = the floor.
+/// @p outside_level (optional): the level of the tissue that bounds the organ (a vessel's
+/// wall, soft tissue); where the profile goes on beyond it on the same side of the reference
+/// (lung or fat past a wall too thin to resolve), the half-way level is taken towards this
+/// level instead, so the wall found is the organ's own boundary, not the far side of its wall.
 [[nodiscard]] std::optional<double> edge_offset_along_normal(const image::Volume<float>& smoothed,
                                                              const Vec3& point_mm, const Vec3& normal,
                                                              const IntensityModel& model, double search_mm,
                                                              double step_mm, double min_rise_per_mm,
-                                                             double window_mm = 0.0, double background_departure = 0.0);
+                                                             double window_mm = 0.0, double background_departure = 0.0,
+                                                             std::optional<double> outside_level = std::nullopt);
 
 /// Direction in which the intensity profile along @p normal first leaves the accepted band,
 /// walking outward from the innermost accepted sample within ±@p search_mm (samples every
