@@ -45,6 +45,16 @@ if [[ -d "$shared/abdomen-dicom/series" ]]; then
   "$ido" compare --mask real_aorta_mask.nii.gz --truth "$shared/abdomen-dicom/aorta.nii.gz" || true
   "$ido" render real_aorta.stl -o real_aorta.png
 fi
+if [[ -f "$shared/ctpa/ct.nii.gz" ]]; then
+  echo "== 5. A real scan: the pulmonary arteries of a CT pulmonary angiogram in $shared"
+  # --edge-reach 2: the arteries the inflation filled, not the distal branches the reference
+  # leaves out; --outside-level 40: the lumen against the soft tissue of the wall, not half-way
+  # to the lung beyond it, as the reference draws it (docs/segmentation.md)
+  "$ido" segment "$shared/ctpa/ct.nii.gz" --seed 33.34,-186.66,693.20 --edge-reach 2 --outside-level 40 \
+    -o real_pulmonary.stl --mask real_pulmonary_mask.nii.gz --report real_pulmonary_report.json
+  "$ido" compare --mask real_pulmonary_mask.nii.gz --truth "$shared/ctpa/pulmonary_artery.nii.gz" || true
+  "$ido" render real_pulmonary.stl -o real_pulmonary.png
+fi
 
 echo
 echo "Demo results are in $out"
