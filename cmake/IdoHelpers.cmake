@@ -32,6 +32,12 @@ function(ido_add_test name)
   endif()
   set(props TIMEOUT ${ARG_TIMEOUT})
   if(ARG_LABELS)
+    # One label: gtest_discover_tests hands the properties on as a flat list, so a second
+    # label would be read as a property name (real_data_test's "data;slow" lost its "slow").
+    list(LENGTH ARG_LABELS n_labels)
+    if(n_labels GREATER 1)
+      message(FATAL_ERROR "ido_add_test(${name}): give one label, not ${ARG_LABELS}")
+    endif()
     list(APPEND props LABELS "${ARG_LABELS}")
   endif()
   if(IDO_SANITIZE MATCHES "address")
