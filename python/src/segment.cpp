@@ -144,8 +144,9 @@ void bind_segment(py::module_& m) {
       "estimated at the seeds when not given. roi = (x0, y0, z0, x1, y1, z1) mm is a safeguard box; bone "
       "accepts anything brighter than the reference; edge_reach_voxels bounds the final snap to the wall "
       "(0 = no limit); outside_level is the level of the tissue bounding the organ (e.g. 40 HU for a vessel's "
-      "wall: the surface follows the lumen where lung or fat lies beyond the wall); calcium adds plaque brighter than it within calcium_reach_mm of the lumen. Releases "
-      "the GIL while it runs. Raises ValueError for bad input.";
+      "wall: the surface follows the lumen where lung or fat lies beyond the wall); calcium adds plaque "
+      "brighter than it within calcium_reach_mm of the lumen. Releases the GIL while it runs. Raises "
+      "ValueError for bad input.";
   m.def(
       "segment",
       [](const image::Volume<float>& ct, const std::vector<Vec3>& seeds,
@@ -153,7 +154,8 @@ void bind_segment(py::module_& m) {
          std::optional<double> tolerance, std::optional<std::array<double, 6>> roi, bool bone, bool white_noise,
          double edge_reach_voxels, int max_iterations, std::optional<double> calcium, double calcium_reach_mm,
          std::optional<double> outside_level) {
-        const SegmentArgs a{reference, tolerance, roi, bone, white_noise, edge_reach_voxels, max_iterations, outside_level};
+        const SegmentArgs a{reference,      tolerance, roi, bone, white_noise, edge_reach_voxels,
+                            max_iterations, outside_level};
         const BalloonOptions bo = balloon_options(a);
         const std::vector<Vec3> points = seed_points(ct, seeds, seed_voxels);
         py::gil_scoped_release unlocked;
