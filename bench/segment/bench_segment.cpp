@@ -159,6 +159,12 @@ void run_method(benchmark::State& state, const std::string& case_name, const std
       // ido_balloon_reach2: the edge stage kept within 2 voxels of the inflated surface
       // (BalloonOptions::edge_reach_voxels; `ido segment --edge-reach 2`).
       if (method == "ido_balloon_reach2") bo.edge_reach_voxels = 2.0;
+      // ido_balloon_lumen: also the lumen against soft tissue, `--edge-reach 2 --outside-level 40`
+      // (BalloonOptions::outside_level; meant for HU, so for the CT cases only).
+      if (method == "ido_balloon_lumen") {
+        bo.edge_reach_voxels = 2.0;
+        bo.outside_level = 40.0;
+      }
       const segment::BalloonResult r = segment::segment_balloon(c.ct, {c.seed_mm}, bo);
       mask = segment::surface_to_mask(r.surface, c.ct);
     } else {
@@ -208,8 +214,9 @@ int main(int argc, char** argv) {
   // ITK peers in this process get it too.
   ido::use_huge_page_heap();
   for (const char* c : {"phantom_y_bifurcation", "ctpa", "abdomen_dicom", "vmtk_aorta"})
-    for (const char* m : {"ido_balloon", "ido_balloon_reach2", "itk_threshold", "itk_geodesic"}) {
+    for (const char* m : {"ido_balloon", "ido_balloon_reach2", "ido_balloon_lumen", "itk_threshold", "itk_geodesic"}) {
       const std::string case_name = c, method = m;
+      if (method == "ido_balloon_lumen" && case_name != "ctpa" && case_name != "abdomen_dicom") continue;
       benchmark::RegisterBenchmark((std::string(c) + "/" + m).c_str(),
                                    [case_name, method](benchmark::State& s) { run_method(s, case_name, method); })
           ->Iterations(1)
