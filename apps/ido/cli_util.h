@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 
+#include <array>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -16,6 +17,10 @@ Vec3 parse_vec3(std::string_view text, std::string_view what);
 
 /// Parses "I,J,K" into integer indices; @throws ido::InvalidInput.
 Index3 parse_index3(std::string_view text, std::string_view what);
+
+/// Parses "x0,y0,z0,x1,y1,z1" (world mm) into a box's corners, naming --roi in errors.
+/// @throws ido::InvalidInput on anything but six numbers with each minimum below its maximum.
+std::array<Vec3, 2> parse_roi(const std::string& text);
 
 /// A Progress that draws a bar on stderr when stderr is a terminal and quiet is off,
 /// and reports nothing otherwise.

@@ -57,6 +57,11 @@ struct Options {
   int max_depth = 3;
   double edge_mm = 0.0;
   std::string truth;
+  // The vessel's balloon, as `ido segment` takes it (--reference, --tolerance, --edge-reach,
+  // --outside-level); the box bounds both organs.
+  std::optional<double> vessel_reference, vessel_tolerance, vessel_outside_level;
+  double vessel_edge_reach = 0.0;
+  std::string roi;
   int vessel_label = 1;
   int bone_label = 2;
   double deform_steps = 60;
@@ -110,9 +115,7 @@ image::Volume<std::uint8_t> label_mask(const image::Volume<float>& labels, int l
 }
 
 Organ segment_organ(const std::string& name, const image::Volume<float>& ct, const std::vector<Vec3>& seeds,
-                    bool bone, const fs::path& dir, Progress* progress) {
-  segment::BalloonOptions bo;
-  bo.accept_brighter = bone;
+                    const segment::BalloonOptions& bo, const fs::path& dir, Progress* progress) {
   Organ organ{name, segment::segment_balloon(ct, seeds, bo, progress), {}};
   organ.mask = segment::surface_to_mask(organ.balloon.surface, ct);
   io::write_triangle_mesh(dir / (name + "_surface.stl"), organ.balloon.surface);
@@ -337,6 +340,18 @@ std::string summary_markdown(const json& report) {
 
 void run(const Options& o, const GlobalOptions& g) {
   const auto start = std::chrono::steady_clock::now();
+  if (o.vessel_reference.has_value() != o.vessel_tolerance.has_value())
+    throw InvalidInput("give --vessel-reference and --vessel-tolerance together (or neither, to estimate both)");
+  if (o.vessel_reference && !std::isfinite(*o.vessel_reference)) throw InvalidInput("--vessel-reference must be finite");
+  if (o.vessel_tolerance && !(*o.vessel_tolerance > 0 && std::isfinite(*o.vessel_tolerance)))
+    throw InvalidInput("--vessel-tolerance must be positive");
+  if (!(o.vessel_edge_reach >= 0) || !std::isfinite(o.vessel_edge_reach))
+    throw InvalidInput(fmt::format("--vessel-edge-reach must be 0 (no limit) or a positive number of voxels, got {}",
+                                   o.vessel_edge_reach));
+  if (o.vessel_outside_level && !std::isfinite(*o.vessel_outside_level))
+    throw InvalidInput("--vessel-outside-level must be a finite intensity");
+  std::optional<std::array<Vec3, 2>> roi;
+  if (!o.roi.empty()) roi = parse_roi(o.roi);
   const fs::path dir = o.out_dir;
   std::error_code ec;
   fs::create_directories(dir, ec);
@@ -360,8 +375,22 @@ void run(const Options& o, const GlobalOptions& g) {
   std::vector<Organ> organs;
   auto add_organ = [&](const std::string& name, const std::vector<Vec3>& seeds, bool bone, int label) {
     ido::logger().info("segmenting the {} from {} seed(s)", name, seeds.size());
-    organs.push_back(segment_organ(name, ct, seeds, bone, dir, progress.get()));
+    segment::BalloonOptions bo;
+    bo.accept_brighter = bone;
+    bo.roi_mm = roi;
+    if (!bone) {
+      bo.reference = o.vessel_reference;
+      bo.tolerance = o.vessel_tolerance;
+      bo.edge_reach_voxels = o.vessel_edge_reach;
+      bo.outside_level = o.vessel_outside_level;
+    }
+    organs.push_back(segment_organ(name, ct, seeds, bo, dir, progress.get()));
     json entry;
+    entry["options"] = {{"edge_reach_voxels", bo.edge_reach_voxels},
+                        {"outside_level", bo.outside_level ? json(*bo.outside_level) : json(nullptr)},
+                        {"roi_mm", roi ? json::array({{(*roi)[0].x(), (*roi)[0].y(), (*roi)[0].z()},
+                                                      {(*roi)[1].x(), (*roi)[1].y(), (*roi)[1].z()}})
+                                       : json(nullptr)}};
     entry["balloon"] = balloon_json(organs.back().balloon.report);
     entry["surface_checks"] = mesh_check_json(geometry::check_mesh(organs.back().balloon.surface));
     if (truth) {
@@ -448,6 +477,16 @@ void setup(CLI::App& app, const GlobalOptions& g) {
   sub->add_flag("--deform", opts->deform, "Deform the segmented vessel (corotational FEM under gravity)");
   sub->add_option("--deform-steps", opts->deform_steps, "Steps of the deformation (default 60)")
       ->check(CLI::Range(1, 100000));
+  sub->add_option("--vessel-reference", opts->vessel_reference,
+                  "Vessel grey level (e.g. HU), with --vessel-tolerance; estimated at the seeds if omitted");
+  sub->add_option("--vessel-tolerance", opts->vessel_tolerance, "Accepted departure from --vessel-reference");
+  sub->add_option("--vessel-edge-reach", opts->vessel_edge_reach,
+                  "As `ido segment --edge-reach` for the vessel: voxels the final snap may move the surface; 0 = no "
+                  "limit (default)");
+  sub->add_option("--vessel-outside-level", opts->vessel_outside_level,
+                  "As `ido segment --outside-level` for the vessel: level of the tissue bounding it (e.g. 40 HU for "
+                  "the lumen against its wall)");
+  sub->add_option("--roi", opts->roi, "Region of interest x0,y0,z0,x1,y1,z1 (world mm) for both balloons, a safeguard");
   sub->add_option("--truth", opts->truth, "Label volume to score the segmentations against");
   sub->add_option("--vessel-label", opts->vessel_label, "Vessel's label in --truth (default 1)");
   sub->add_option("--bone-label", opts->bone_label, "Bone's label in --truth (default 2)");

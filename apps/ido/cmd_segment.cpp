@@ -134,28 +134,6 @@ image::Volume<float> seed_slice(const image::Volume<float>& ct, const Vec3& seed
   return out;
 }
 
-std::array<Vec3, 2> parse_roi(const std::string& text) {
-  std::vector<double> v;
-  std::size_t start = 0;
-  while (start <= text.size()) {
-    const std::size_t comma = text.find(',', start);
-    const std::string part = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
-    try {
-      std::size_t used = 0;
-      v.push_back(std::stod(part, &used));
-      if (used != part.size()) throw std::invalid_argument("trailing");
-    } catch (const std::exception&) {
-      throw InvalidInput(fmt::format("--roi: '{}' is not a number (expected x0,y0,z0,x1,y1,z1 in mm)", part));
-    }
-    if (comma == std::string::npos) break;
-    start = comma + 1;
-  }
-  if (v.size() != 6) throw InvalidInput(fmt::format("--roi: expected 6 numbers x0,y0,z0,x1,y1,z1 (mm), got {}", v.size()));
-  const Vec3 a(v[0], v[1], v[2]), b(v[3], v[4], v[5]);
-  if ((a.array() >= b.array()).any()) throw InvalidInput("--roi: each minimum must be below its maximum");
-  return {a, b};
-}
-
 void run(const SegmentCliOptions& o, const GlobalOptions& g) {
   if (o.seeds.empty() && o.seed_voxels.empty()) throw InvalidInput("give at least one --seed X,Y,Z or --seed-voxel I,J,K");
   if (o.reference.has_value() != o.tolerance.has_value())

@@ -59,8 +59,10 @@ bool is_png(const fs::path& p) {
 TEST(PipelineCli, SpineAortaEndToEnd) {
   const auto in = make_input("pipeline-e2e");
   const fs::path out = in.dir / "out";
+  // --vessel-edge-reach 2: the options reach the vessel's balloon (and the report), not the bone's.
   const auto r = test::run_tool(fmt::format(
-      "pipeline {} --seed {} --bone-seed {} --truth {} --drill-path {} --max-depth 2 --deform --deform-steps 5 -o {}",
+      "pipeline {} --seed {} --bone-seed {} --truth {} --drill-path {} --max-depth 2 --deform --deform-steps 5 "
+      "--vessel-edge-reach 2 -o {}",
       in.ct.string(), seed_arg(in.vessel_seed), seed_arg(in.bone_seed), in.labels.string(), in.path.string(),
       out.string()));
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -81,6 +83,9 @@ TEST(PipelineCli, SpineAortaEndToEnd) {
     EXPECT_TRUE(report["segmentation"][organ].contains("scores")) << organ;
   }
   EXPECT_GE(report["segmentation"]["vessel"]["scores"]["dice"].get<double>(), 0.97);
+  EXPECT_EQ(report["segmentation"]["vessel"]["options"]["edge_reach_voxels"].get<double>(), 2.0);
+  EXPECT_EQ(report["segmentation"]["bone"]["options"]["edge_reach_voxels"].get<double>(), 0.0);
+  EXPECT_TRUE(report["segmentation"]["vessel"]["options"]["outside_level"].is_null());
   // The vertebra too, posterior arch included: the ring around the canal makes it genus 1.
   EXPECT_GE(report["segmentation"]["bone"]["scores"]["dice"].get<double>(), 0.97);
   EXPECT_EQ(report["segmentation"]["bone"]["balloon"]["euler_characteristic"].get<int>(), 0);
@@ -121,6 +126,20 @@ TEST(PipelineCli, BadInputExitsTwoAndWritesNoReport) {
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("--seed-voxel"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(out / "report.json"));
+  // The vessel's balloon options are checked before anything is read or written.
+  const fs::path none = in.dir / "not-made";
+  for (const auto& [args, named] : {std::pair<std::string, std::string>{"--vessel-tolerance 50", "--vessel-reference"},
+                                    {"--vessel-reference 300 --vessel-tolerance -5", "--vessel-tolerance"},
+                                    {"--vessel-edge-reach -1", "--vessel-edge-reach"},
+                                    {"--vessel-outside-level nan", "--vessel-outside-level"},
+                                    {"--roi 0,0,0,10,10", "--roi"},
+                                    {"--roi 0,0,0,-10,10,10", "--roi"}}) {
+    r = test::run_tool(fmt::format("pipeline {} --seed {} {} -o {}", in.ct.string(), seed_arg(in.vessel_seed), args,
+                                   none.string()));
+    EXPECT_EQ(r.exit_code, 2) << args;
+    EXPECT_NE(r.err.find(named), std::string::npos) << args << ": " << r.err;
+    EXPECT_FALSE(fs::exists(none)) << args;
+  }
 }
 
 }  // namespace ido
