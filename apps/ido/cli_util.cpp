@@ -101,4 +101,20 @@ std::array<Vec3, 2> parse_roi(const std::string& text) {
   return {a, b};
 }
 
+void check_balloon_arguments(std::string_view prefix, const std::optional<double>& reference,
+                             const std::optional<double>& tolerance, double edge_reach_voxels,
+                             const std::optional<double>& outside_level) {
+  if (reference.has_value() != tolerance.has_value())
+    throw InvalidInput(fmt::format("give {0}reference and {0}tolerance together (or neither, to estimate both at the seeds)",
+                                   prefix));
+  if (reference && !std::isfinite(*reference)) throw InvalidInput(fmt::format("{}reference must be finite", prefix));
+  if (tolerance && !(*tolerance > 0 && std::isfinite(*tolerance)))
+    throw InvalidInput(fmt::format("{}tolerance must be positive", prefix));
+  if (!(edge_reach_voxels >= 0) || !std::isfinite(edge_reach_voxels))
+    throw InvalidInput(fmt::format("{}edge-reach must be 0 (no limit) or a positive number of voxels, got {}", prefix,
+                                   edge_reach_voxels));
+  if (outside_level && !std::isfinite(*outside_level))
+    throw InvalidInput(fmt::format("{}outside-level must be a finite intensity", prefix));
+}
+
 }  // namespace ido::cli

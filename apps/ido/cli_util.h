@@ -3,6 +3,7 @@
 
 #include <array>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -21,6 +22,14 @@ Index3 parse_index3(std::string_view text, std::string_view what);
 /// Parses "x0,y0,z0,x1,y1,z1" (world mm) into a box's corners, naming --roi in errors.
 /// @throws ido::InvalidInput on anything but six numbers with each minimum below its maximum.
 std::array<Vec3, 2> parse_roi(const std::string& text);
+
+/// Checks the balloon's arguments as a command gives them, naming each option with @p prefix
+/// ("--" for `ido segment`, "--vessel-" for `ido pipeline`): reference and tolerance given
+/// together, a finite reference, a positive finite tolerance, an edge reach of 0 or more, a
+/// finite outside level. @throws ido::InvalidInput.
+void check_balloon_arguments(std::string_view prefix, const std::optional<double>& reference,
+                             const std::optional<double>& tolerance, double edge_reach_voxels,
+                             const std::optional<double>& outside_level);
 
 /// A Progress that draws a bar on stderr when stderr is a terminal and quiet is off,
 /// and reports nothing otherwise.

@@ -340,16 +340,8 @@ std::string summary_markdown(const json& report) {
 
 void run(const Options& o, const GlobalOptions& g) {
   const auto start = std::chrono::steady_clock::now();
-  if (o.vessel_reference.has_value() != o.vessel_tolerance.has_value())
-    throw InvalidInput("give --vessel-reference and --vessel-tolerance together (or neither, to estimate both)");
-  if (o.vessel_reference && !std::isfinite(*o.vessel_reference)) throw InvalidInput("--vessel-reference must be finite");
-  if (o.vessel_tolerance && !(*o.vessel_tolerance > 0 && std::isfinite(*o.vessel_tolerance)))
-    throw InvalidInput("--vessel-tolerance must be positive");
-  if (!(o.vessel_edge_reach >= 0) || !std::isfinite(o.vessel_edge_reach))
-    throw InvalidInput(fmt::format("--vessel-edge-reach must be 0 (no limit) or a positive number of voxels, got {}",
-                                   o.vessel_edge_reach));
-  if (o.vessel_outside_level && !std::isfinite(*o.vessel_outside_level))
-    throw InvalidInput("--vessel-outside-level must be a finite intensity");
+  check_balloon_arguments("--vessel-", o.vessel_reference, o.vessel_tolerance, o.vessel_edge_reach,
+                          o.vessel_outside_level);
   std::optional<std::array<Vec3, 2>> roi;
   if (!o.roi.empty()) roi = parse_roi(o.roi);
   const fs::path dir = o.out_dir;

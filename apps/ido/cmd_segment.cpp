@@ -136,17 +136,10 @@ image::Volume<float> seed_slice(const image::Volume<float>& ct, const Vec3& seed
 
 void run(const SegmentCliOptions& o, const GlobalOptions& g) {
   if (o.seeds.empty() && o.seed_voxels.empty()) throw InvalidInput("give at least one --seed X,Y,Z or --seed-voxel I,J,K");
-  if (o.reference.has_value() != o.tolerance.has_value())
-    throw InvalidInput("give --reference and --tolerance together (or neither, to estimate both at the seeds)");
-  if (o.tolerance && !(*o.tolerance > 0)) throw InvalidInput("--tolerance must be positive");
+  check_balloon_arguments("--", o.reference, o.tolerance, o.edge_reach_voxels, o.outside_level);
   if (o.calcium && !std::isfinite(*o.calcium)) throw InvalidInput("--calcium must be a finite intensity");
   if (!(o.calcium_reach_mm > 0) || !std::isfinite(o.calcium_reach_mm))
     throw InvalidInput(fmt::format("--calcium-reach must be a positive length in mm, got {}", o.calcium_reach_mm));
-  if (!(o.edge_reach_voxels >= 0) || !std::isfinite(o.edge_reach_voxels))
-    throw InvalidInput(fmt::format("--edge-reach must be 0 (no limit) or a positive number of voxels, got {}",
-                                   o.edge_reach_voxels));
-  if (o.outside_level && !std::isfinite(*o.outside_level))
-    throw InvalidInput("--outside-level must be a finite intensity");
   const std::string ext = std::filesystem::path(o.output).extension().string();
   if (ext != ".stl" && ext != ".ply" && ext != ".obj" && ext != ".vtp")
     throw InvalidInput(fmt::format("{}: the surface output must be .stl, .ply, .obj or .vtp", o.output));

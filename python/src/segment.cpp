@@ -48,7 +48,6 @@ BalloonOptions balloon_options(const SegmentArgs& a) {
   bo.accept_brighter = a.bone;
   if (a.white_noise) bo.estimate.residual_ball_factor = 5.0;  // as `ido segment --white-noise`
   bo.edge_reach_voxels = a.edge_reach_voxels;
-  if (a.outside_level && !std::isfinite(*a.outside_level)) throw InvalidInput("outside_level must be finite");
   bo.outside_level = a.outside_level;
   bo.max_iterations = a.max_iterations;
   if (a.roi) {
