@@ -4,15 +4,18 @@ WERROR := $(if $(CI),ON,OFF)
 PREFIX ?= /usr/local
 FUZZ_SECONDS ?= 30
 
-.PHONY: all deps build test test-release test-sanitize test-tsan demo bench fuzz install clean
+.PHONY: all deps configure build test test-release test-sanitize test-tsan demo bench fuzz install clean
 
 all: build
 
 deps:
 	@bash scripts/install-deps.sh
 
-build: deps
+configure: deps
 	cmake --preset release -DIDO_WERROR=$(WERROR) >/dev/null
+
+# Everything: libraries, the ido tool, tests, examples, the Python module.
+build: configure
 	cmake --build --preset release
 
 test-release: build
@@ -32,7 +35,9 @@ test-tsan: deps
 	cmake --build --preset tsan
 	ctest --preset tsan
 
-demo: build
+# The demo runs only the ido tool (scripts/demo.sh), so only it and its libraries are built.
+demo: configure
+	cmake --build --preset release --target ido_cli
 	@bash scripts/demo.sh build/release/bin/ido
 
 bench: deps

@@ -35,6 +35,20 @@ echo "== 3. Format conversions of the results"
 
 # The real scans: ../shared/data beside the checkout, or $IDO_SHARED_DATA (as for the tests).
 shared="${IDO_SHARED_DATA:-$root/../shared/data}"
+missing=()
+[[ -d "$shared/abdomen-dicom/series" ]] || missing+=("$shared/abdomen-dicom/series (step 4)")
+[[ -f "$shared/ctpa/ct.nii.gz" ]] || missing+=("$shared/ctpa/ct.nii.gz (step 5)")
+if (( ${#missing[@]} > 0 )); then
+  echo "== Real scans not found, so skipped. Looked for:"
+  printf '     %s\n' "${missing[@]}"
+  if [[ -n "${IDO_SHARED_DATA:-}" ]]; then
+    echo "   (IDO_SHARED_DATA=$IDO_SHARED_DATA)"
+  else
+    echo "   (IDO_SHARED_DATA is not set, so ../shared/data beside the checkout was used)"
+  fi
+  echo "   To run them, point IDO_SHARED_DATA at the folder that holds abdomen-dicom/ and ctpa/:"
+  echo "     IDO_SHARED_DATA=/path/to/shared/data make demo"
+fi
 if [[ -d "$shared/abdomen-dicom/series" ]]; then
   echo "== 4. A real scan: the abdominal aorta from the DICOM series in $shared"
   "$ido" info "$shared/abdomen-dicom/series" | head -6
