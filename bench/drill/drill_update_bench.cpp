@@ -130,7 +130,7 @@ void BM_UpdateTimeThreads(benchmark::State& state) { update_time(state, static_c
 // Unlimited erosion with whole-root v_lists (chunk level 0: the previous algorithm's work,
 // in the new code), unlimited erosion with chunked v_lists, the default budgets, half, one
 // and a half and about two thirds of them (4000 / 5500: what a p99 of 1 ms at depth 8 would
-// take at session 7's per-visit cost).
+// take at the per-visit cost measured on 2026-12-02).
 BENCHMARK(BM_UpdateTime)
     ->Args({4, 0, 0, 0})
     ->Args({5, 0, 0, 0})
@@ -409,8 +409,7 @@ void BM_HapticLoop(benchmark::State& state) {
     for (int i = 0; i <= static_cast<int>(seconds * 100); ++i) {
       t.push_back(i * 0.01);
       ToolPose p;
-      // Back and forth over x = 6…26 mm at 10 mm/s, 1 mm into the top face. (Until
-      // 2026-12-01 the amplitude was 10× too large: x ran to 206 mm at 100 mm/s, mostly in air.)
+      // Back and forth over x = 6…26 mm at 10 mm/s, 1 mm into the top face.
       const double x = 6.0 + std::abs(std::fmod(i * 0.1, 40.0) - 20.0);
       p.position_mm = Vec3(x, 16.0 + 3.0 * std::sin(i * 0.01), kBlock.z() + kRadius - 1.0);
       poses.push_back(p);

@@ -499,7 +499,7 @@ std::array<std::size_t, 3> uniform_leaf_blocks(const TetHierarchy& h, std::size_
 }
 
 TEST(Erosion, LeavesNoSiblingBlockOfEightFullOrEightErasedLeaves) {
-  // What bench BM_BlockCensus measures (bench/results/drill.md, session 5): after erosion,
+  // What bench BM_BlockCensus measures (bench/drill/drill_update_bench.cpp): after erosion,
   // with or without a visit budget and with the volume budget running out (frames dropped),
   // no block holds 8 full leaves (a partly covered leaf is refined only when the dry run
   // finds a descendant that goes, and an idle refinement is undone on leaving its node:

@@ -128,9 +128,9 @@ TEST_P(RealData, ValidSurface) {
   RecordProperty("euler", std::to_string(m.euler_characteristic));
 }
 
-// The required accuracy (issue 4): Dice ≥ 0.93 and HD95 ≤ 2 voxels. Known shortfall today
-// (bench/results/segment.md): reported as skipped with the measured figures, or a failure
-// with IDO_REQUIRE_REAL_ACCURACY=1.
+// The required accuracy (issue 4): Dice ≥ 0.93 and HD95 ≤ 2 voxels. A case that falls short
+// (bench/RESULTS.md, segmentation) is reported as skipped with the measured figures, or a
+// failure with IDO_REQUIRE_REAL_ACCURACY=1.
 TEST_P(RealData, AccuracyTarget) {
   IDO_REQUIRE_SHARED_DATA();
   const RealCase c = GetParam();
