@@ -1,0 +1,151 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "nifti_header.h"
+
+#include <zlib.h>
+
+#include <cmath>
+#include <filesystem>
+#include <memory>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "ido/core/error.h"
+#include "ido/io/memory_budget.h"
+#include "text_parser.h"
+
+namespace ido::io::detail {
+namespace {
+
+/// Bytes per voxel of a NIfTI datatype code (nifti1.h DT_*); 0 if unknown or sub-byte.
+int datatype_bytes(int code) {
+  switch (code) {
+    case 2: case 256: return 1;                      // uint8, int8
+    case 4: case 512: return 2;                      // int16, uint16
+    case 8: case 16: case 768: case 2304: return 4;  // int32, float32, uint32, rgba32
+    case 128: return 3;                              // rgb24
+    case 32: case 64: case 1024: case 1280: return 8;  // complex64, float64, int64, uint64
+    case 1536: case 1792: return 16;                 // float128, complex128
+    case 2048: return 32;                            // complex256
+    default: return 0;
+  }
+}
+
+struct GzFile {
+  gzFile f = nullptr;
+  explicit GzFile(const std::string& path) : f(gzopen(path.c_str(), "rb")) {}
+  ~GzFile() {
+    if (f) gzclose(f);
+  }
+  GzFile(const GzFile&) = delete;
+  GzFile& operator=(const GzFile&) = delete;
+  /// The zlib error after a failed or short read ("" if the stream simply ended).
+  std::string error() const {
+    int code = Z_OK;
+    const char* msg = gzerror(f, &code);
+    return code == Z_OK || code == Z_STREAM_END ? std::string() : std::string(msg ? msg : "zlib error");
+  }
+};
+
+bool gz_name(const std::string& path) {
+  return path.size() >= 3 && (path.compare(path.size() - 3, 3, ".gz") == 0 || path.compare(path.size() - 3, 3, ".GZ") == 0);
+}
+
+}  // namespace
+
+NiftiHeader parse_nifti_header(std::string_view bytes, const std::string& name) {
+  if (bytes.size() < 4) throw IoError(name, fmt::format("file ends inside the NIfTI header ({} of 348 bytes)", bytes.size()));
+  NiftiHeader h;
+  const auto size_le = ByteCursor(bytes, name).read<std::int32_t>(false, "header size");
+  const auto size_be = ByteCursor(bytes, name).read<std::int32_t>(true, "header size");
+  if (size_le == 540 || size_be == 540)
+    throw IoError(name, "NIfTI-2 is not supported (ido reads NIfTI-1 through ITK 5.2); convert the file to NIfTI-1");
+  if (size_le != 348 && size_be != 348)
+    throw IoError(name, fmt::format("not a NIfTI-1 file: the header size field is {}, expected 348", size_le));
+  h.big_endian = size_le != 348;
+  if (bytes.size() < 348)
+    throw IoError(name, fmt::format("file ends inside the NIfTI header ({} of 348 bytes; truncated?)", bytes.size()));
+  const std::string_view magic = bytes.substr(344, 4);
+  if (magic == std::string_view("ni1\0", 4))
+    throw IoError(name, "header says its voxels are in a separate .img file (magic 'ni1'); ido reads single-file .nii");
+  if (magic != std::string_view("n+1\0", 4))
+    throw IoError(name, "no NIfTI-1 magic 'n+1' at byte 344 (an Analyze 7.5 or damaged header?)");
+  auto at = [&](std::size_t offset) { return ByteCursor(bytes, name, offset); };
+  auto dims = at(40);
+  for (auto& d : h.dim) d = dims.read<std::int16_t>(h.big_endian, "dim");
+  if (h.dim[0] < 1 || h.dim[0] > 7)
+    throw IoError(name, fmt::format("dim[0] is {}: a NIfTI image has 1 to 7 axes", h.dim[0]));
+  h.voxel_count = 1;
+  for (std::int64_t a = 1; a <= h.dim[0]; ++a) {
+    const auto d = h.dim[static_cast<std::size_t>(a)];
+    if (d < 1) throw IoError(name, fmt::format("dim[{}] is {}: sizes must be at least 1", a, d));
+    h.voxel_count = saturating_product({h.voxel_count, static_cast<std::uint64_t>(d)});
+  }
+  auto types = at(70);
+  h.datatype = types.read<std::int16_t>(h.big_endian, "datatype");
+  h.bytes_per_voxel = datatype_bytes(h.datatype);
+  if (h.bytes_per_voxel == 0) throw IoError(name, fmt::format("datatype {} is not a supported NIfTI data type", h.datatype));
+  h.voxel_bytes = saturating_product({h.voxel_count, static_cast<std::uint64_t>(h.bytes_per_voxel)});
+  auto pix = at(76);
+  for (auto& p : h.pixdim) p = pix.read<float>(h.big_endian, "pixdim");
+  auto rest = at(108);
+  const double vox_offset = rest.read<float>(h.big_endian, "vox_offset");
+  h.scl_slope = rest.read<float>(h.big_endian, "scl_slope");
+  h.scl_inter = rest.read<float>(h.big_endian, "scl_inter");
+  if (!std::isfinite(vox_offset) || vox_offset < 0.0 || vox_offset > 9e18)
+    throw IoError(name, fmt::format("vox_offset {} is not a byte offset", vox_offset));
+  // As niftilib: the voxels of a single-file NIfTI start at vox_offset, but not inside the header.
+  h.voxel_offset = std::max<std::uint64_t>(static_cast<std::uint64_t>(vox_offset), 348);
+  return h;
+}
+
+NiftiHeader read_nifti_header(const std::string& path) {
+  GzFile in(path);
+  if (!in.f) throw IoError(path, "cannot open for reading");
+  std::string buf(kNiftiHeaderReadBytes, '\0');
+  const int n = gzread(in.f, buf.data(), static_cast<unsigned>(buf.size()));
+  if (n < 0) throw IoError(path, fmt::format("cannot decompress the NIfTI header: {}", in.error()));
+  buf.resize(static_cast<std::size_t>(n));
+  if (buf.size() < 348 && !in.error().empty() && buf.size() >= 4 && gz_name(path))
+    throw IoError(path, fmt::format("gzip stream is cut short inside the NIfTI header ({} of 348 bytes): {}", buf.size(),
+                                    in.error()));
+  return parse_nifti_header(buf, path);
+}
+
+void check_nifti_voxel_bytes(const std::string& path, const NiftiHeader& header) {
+  const std::uint64_t needed = header.voxel_offset > UINT64_MAX - header.voxel_bytes
+                                   ? UINT64_MAX
+                                   : header.voxel_offset + header.voxel_bytes;
+  auto short_of = [&](std::uint64_t have, const char* how) {
+    return IoError(path, fmt::format("{} {} bytes, too few for the {} bytes of voxels its header declares from byte {} "
+                                     "(truncated?)",
+                                     how, have, header.voxel_bytes, header.voxel_offset));
+  };
+  if (!gz_name(path)) {
+    std::error_code ec;
+    const auto size = std::filesystem::file_size(path, ec);
+    if (ec) throw IoError(path, "cannot read the file size: " + ec.message());
+    if (size < needed) throw short_of(size, "file has");
+    return;
+  }
+  GzFile in(path);
+  if (!in.f) throw IoError(path, "cannot open for reading");
+  gzbuffer(in.f, 1u << 18);
+  std::vector<char> chunk(std::size_t(1) << 18);
+  std::uint64_t total = 0;
+  while (total < needed) {
+    const auto want = static_cast<unsigned>(std::min<std::uint64_t>(chunk.size(), needed - total));
+    const int n = gzread(in.f, chunk.data(), want);
+    if (n > 0) total += static_cast<std::uint64_t>(n);
+    if (n < static_cast<int>(want)) {
+      const std::string why = in.error();
+      if (!why.empty())
+        throw IoError(path, fmt::format("gzip stream is cut short or corrupt after {} bytes ({}); its header declares "
+                                        "{} bytes of voxels from byte {} (truncated?)",
+                                        total, why, header.voxel_bytes, header.voxel_offset));
+      throw short_of(total, "decompresses to");
+    }
+  }
+}
+
+}  // namespace ido::io::detail

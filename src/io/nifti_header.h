@@ -1,0 +1,49 @@
+// SPDX-License-Identifier: Apache-2.0
+// Private to ido::io (and the fuzz targets): the checks ido makes on a NIfTI file itself,
+// around ITK's reader. ITK 5.2's NIfTI reader (niftilib) fills missing voxel bytes with
+// zeros without an error and replaces a spacing of 0, -1 or NaN by 1; it reads NIfTI-1 only.
+// This code reads the 348-byte header (through zlib, so .nii and .nii.gz alike) and counts
+// the bytes a file really holds, so that such files are refused by name. No ITK here.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <string_view>
+
+namespace ido::io::detail {
+
+/// The fields of a NIfTI-1 header that ido checks.
+struct NiftiHeader {
+  bool big_endian = false;
+  std::array<std::int64_t, 8> dim{};      ///< dim[0] axes, then the size along each
+  int datatype = 0;                       ///< NIfTI DT_* code
+  int bytes_per_voxel = 0;                ///< from the datatype
+  std::array<double, 8> pixdim{};         ///< pixdim[1..3]: spacing in the file's units
+  std::uint64_t voxel_offset = 0;         ///< where the voxels start (vox_offset, at least 352)
+  std::uint64_t voxel_count = 0;          ///< saturates at UINT64_MAX
+  std::uint64_t voxel_bytes = 0;          ///< voxel_count × bytes_per_voxel, saturating
+  double scl_slope = 0.0;
+  double scl_inter = 0.0;
+};
+
+/// Number of header bytes parse_nifti_header looks at (a NIfTI-2 header's size).
+inline constexpr std::size_t kNiftiHeaderReadBytes = 540;
+
+/// Parses and checks the start of a (decompressed) NIfTI file: header size 348 in either
+/// byte order (540 is NIfTI-2: refused by name), single-file magic "n+1", 1 to 7 axes of
+/// positive size, a known datatype, a finite vox_offset. Spacing is not judged here (the
+/// volume reader checks every format's spacing in one place).
+/// @throws ido::IoError naming @p name and the problem.
+NiftiHeader parse_nifti_header(std::string_view bytes, const std::string& name);
+
+/// Reads and parses the header of @p path (.nii or .nii.gz). @throws ido::IoError.
+NiftiHeader read_nifti_header(const std::string& path);
+
+/// Checks that @p path holds all of the voxel bytes @p header declares: the file size of a
+/// .nii, the decompressed length of a .nii.gz (read through zlib up to the last byte needed;
+/// a gzip stream that is cut short or corrupt is reported as such).
+/// @throws ido::IoError naming @p path, the bytes found and the bytes declared.
+void check_nifti_voxel_bytes(const std::string& path, const NiftiHeader& header);
+
+}  // namespace ido::io::detail
