@@ -6,6 +6,8 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
+#include <vector>
 
 #include "ido/core/math.h"
 #include "ido/core/progress.h"
@@ -37,5 +39,29 @@ std::unique_ptr<Progress> make_progress(bool quiet);
 
 /// Writes @p text to @p path atomically (temp file + rename).
 void write_text_file(const std::string& path, const std::string& text);
+
+/// Checks, before any work, that @p path can be written as an output file: not a folder, its
+/// folder exists, and a file can be created there (probed with a temporary file that is
+/// removed at once). @throws ido::InvalidInput naming @p option and the path.
+void check_output_file(const std::string& path, std::string_view option);
+
+/// The outputs of one run, written all or none: stage() checks a target (check_output_file)
+/// and gives the temporary path beside it (same extension) to write instead; commit() renames
+/// every staged file into place. Until then nothing is at the targets, and a batch destroyed
+/// uncommitted (an exception) removes its temporaries.
+class OutputBatch {
+ public:
+  OutputBatch() = default;
+  OutputBatch(const OutputBatch&) = delete;
+  OutputBatch& operator=(const OutputBatch&) = delete;
+  ~OutputBatch();
+  /// @throws ido::InvalidInput as check_output_file.
+  std::string stage(const std::string& path, std::string_view option);
+  /// @throws ido::IoError naming the target that could not be put in place.
+  void commit();
+
+ private:
+  std::vector<std::pair<std::string, std::string>> m_files;  // (temporary, target)
+};
 
 }  // namespace ido::cli

@@ -6,7 +6,11 @@
 // session (the drill library knows nothing of viz).
 #include <fmt/format.h>
 
+#include <sys/resource.h>
+
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <optional>
 #include <utility>
@@ -19,6 +23,7 @@
 #include "snapshots.h"
 #include "drill_report.h"
 #include "ido/core/error.h"
+#include "ido/core/log.h"
 #include "ido/drill/boundary_surface.h"
 #include "ido/drill/embedding.h"
 #include "ido/drill/haptic_device.h"
@@ -56,12 +61,34 @@ struct DrillOptions {
 /// The most pictures one run may ask for.
 constexpr double kMaxSnapshots = 2000;
 
-void run(const DrillOptions& o, const GlobalOptions& /*g*/) {
+// The whole process's peak resident memory (bytes), getrusage's ru_maxrss.
+std::size_t peak_rss_bytes() {
+  rusage u{};
+  if (::getrusage(RUSAGE_SELF, &u) != 0) return 0;
+  return static_cast<std::size_t>(u.ru_maxrss) * 1024U;  // KiB on Linux
+}
+
+// The smallest leaf size the hierarchy can reach on @p hierarchy's largest root (mm), and
+// the refinement depth @p min_size_mm implies there.
+void check_min_size(const drill::TetHierarchy& hierarchy, double min_size_mm) {
+  double largest = 0.0;
+  for (std::size_t r = 0; r < hierarchy.root_count(); ++r) largest = std::max(largest, hierarchy.root_diameter(r));
+  if (!(largest > 0.0)) return;
+  const double implied = std::ceil(std::log2(largest / min_size_mm) - 1e-12);
+  if (implied > drill::kMaxDepth) {
+    throw InvalidInput(fmt::format(
+        "--min-size {:g} mm needs refinement depth {:g} on the largest tetrahedron ({:.3g} mm across); the hierarchy "
+        "allows {} levels, so --min-size must be at least {:.3g} mm on this mesh",
+        min_size_mm, implied, largest, drill::kMaxDepth, largest / std::ldexp(1.0, drill::kMaxDepth)));
+  }
+}
+
+void run(const DrillOptions& o, const GlobalOptions& g) {
   if (!io::is_tet_mesh_path(o.output)) throw InvalidInput(fmt::format("{}: -o must be a .vtu (or .msh, .node) file", o.output));
   if (!o.surface.empty() && !io::is_triangle_mesh_path(o.surface)) {
     throw InvalidInput(fmt::format("{}: --surface must be .stl, .ply, .obj or .vtp", o.surface));
   }
-  if (o.min_size_mm < 0.0) throw InvalidInput("--min-size must be positive");
+  if (!(o.min_size_mm >= 0.0) || !std::isfinite(o.min_size_mm)) throw InvalidInput("--min-size must be a positive number of mm");
   if (o.max_depth && (*o.max_depth < 0 || *o.max_depth > drill::kMaxDepth)) {
     throw InvalidInput(fmt::format("--max-depth must be between 0 and {}", drill::kMaxDepth));
   }
@@ -95,13 +122,24 @@ void run(const DrillOptions& o, const GlobalOptions& /*g*/) {
     picture.width_px = w;
     picture.height_px = h;
   }
-  auto device = drill::ScriptedTrajectory::load_csv(o.path);
+  // Every output is checked before the work starts, and written all or none at the end.
+  OutputBatch outputs;
+  const std::string output_tmp = outputs.stage(o.output, "-o");
+  const std::string surface_tmp = o.surface.empty() ? std::string() : outputs.stage(o.surface, "--surface");
+  const std::string report_tmp = o.report.empty() ? std::string() : outputs.stage(o.report, "--report");
+
+  // The recording buffers hold the path's ticks (1 kHz) and the drain, not a fixed 2^20.
+  const auto peek = drill::ScriptedTrajectory::load_csv(o.path, 1);
+  const auto ticks = static_cast<std::size_t>((peek.duration() + so.drain_limit_s + 1.0) / so.haptic_period_s) + 1024;
+  so.max_haptic_ticks = std::min<std::size_t>(ticks, so.max_haptic_ticks);
+  auto device = drill::ScriptedTrajectory(peek.times(), peek.poses(), so.max_haptic_ticks);
   if (!o.snapshots.empty() && device.duration() / o.snapshot_every_s > kMaxSnapshots) {
     throw InvalidInput(fmt::format("--snapshot-every {} s gives more than {} pictures over the {} s path", o.snapshot_every_s,
                                    kMaxSnapshots, device.duration()));
   }
   const auto mesh = io::read_tet_mesh(o.mesh);
   drill::TetHierarchy hierarchy(mesh);
+  if (o.min_size_mm > 0.0) check_min_size(hierarchy, o.min_size_mm);
   if (!o.density_from.empty()) drill::assign_density_from_ct(hierarchy, io::read_volume(o.density_from));
   const double before = hierarchy.material_volume();
   std::optional<SnapshotWriter> writer;
@@ -115,11 +153,16 @@ void run(const DrillOptions& o, const GlobalOptions& /*g*/) {
     sim.set_surface_snapshots([&shots](double t, const auto& lists) { shots.emplace_back(t, lists); }, o.snapshot_every_s,
                               device.duration());
   }
-  sim.run(device.duration() + 60.0);
+  {
+    const auto progress = make_progress(g.quiet);
+    // A safety net only: the session ends at the path's end plus at most the drain limit.
+    sim.run(device.duration() + so.drain_limit_s + 30.0, progress.get());
+  }
+  const auto& st = sim.stats();
 
-  io::write_tet_mesh(o.output, drill::full_leaf_mesh(hierarchy));
+  io::write_tet_mesh(output_tmp, drill::full_leaf_mesh(hierarchy));
   const auto surface = drill::assemble_surface(sim.render_v_lists(), hierarchy.vertices());
-  if (!o.surface.empty()) io::write_triangle_mesh(o.surface, surface);
+  if (!o.surface.empty()) io::write_triangle_mesh(surface_tmp, surface);
   if (writer) {
     // The camera is fixed by the first picture (the intact mesh) and kept for the rest.
     for (const auto& shot : shots) {
@@ -129,10 +172,19 @@ void run(const DrillOptions& o, const GlobalOptions& /*g*/) {
       (void)writer->write(ren);
     }
   }
+  const drill::SessionMemory mem = sim.memory_use();
+  const std::size_t force_record = device.forces().size() * sizeof(drill::ForceSample);
+  const std::size_t peak = peak_rss_bytes();
   if (!o.report.empty()) {
     nlohmann::json r = drill_session_json(hierarchy, sim, so, before);
     r["mesh"] = o.mesh;
     r["surface_triangles"] = surface.triangles.size();
+    r["memory"] = {{"peak_rss_bytes", peak},
+                   {"nodes_bytes", mem.nodes},
+                   {"v_lists_bytes", mem.v_lists},
+                   {"hash_bytes", mem.hash},
+                   {"buffers_bytes", mem.buffers + force_record},
+                   {"other_bytes", peak > mem.total() + force_record ? peak - mem.total() - force_record : 0}};
     if (!o.snapshots.empty()) {
       r["snapshots"] = writer->files_json();
       r["snapshot_period_s"] = o.snapshot_every_s;
@@ -140,8 +192,27 @@ void run(const DrillOptions& o, const GlobalOptions& /*g*/) {
       for (const auto& s : shots) times.push_back(s.first);
       r["snapshot_times_s"] = times;
     }
-    write_text_file(o.report, r.dump(2) + "\n");
+    write_text_file(report_tmp, r.dump(2) + "\n");
   }
+  outputs.commit();
+  if (!g.quiet) {
+    std::vector<double> force;
+    force.reserve(device.forces().size());
+    for (const auto& f : device.forces()) force.push_back(f.force_n.norm());
+    std::printf("drilled %.3g mm3 in %.1f s (+%.2f s finishing), update p99 %.3g ms, force p99.9 %.3g N, %zu nodes, peak memory %.0f MiB%s\n",
+                before - hierarchy.material_volume(), device.duration(), st.drain_time_s,
+                drill::percentiles(st.update_time_s).p99 * 1e3, drill::percentiles(force).p999, hierarchy.node_count(),
+                static_cast<double>(peak) / (1024.0 * 1024.0),
+                st.backlog_left_positions > 0
+                    ? fmt::format("; {} burr positions left undone after the {:g} s drain limit", st.backlog_left_positions,
+                                  so.drain_limit_s).c_str()
+                    : "");
+  }
+  if (st.backlog_left_positions > 0 || st.timed_out)
+    logger().warn("drill: the session ended with {} burr positions not eroded (drain limit {:g} s{})",
+                  st.backlog_left_positions, so.drain_limit_s, st.timed_out ? ", run timed out" : "");
+  if (st.node_limit_passes > 0)
+    logger().warn("drill: the node limit ({} nodes) left some leaves coarser than asked", so.erosion.max_nodes);
 }
 
 void setup(CLI::App& app, const GlobalOptions& g) {

@@ -30,6 +30,15 @@ nlohmann::json drill_session_json(const drill::TetHierarchy& hierarchy, const dr
   r["surface_threads"] = st.surface_threads;
   r["collision_updates"] = st.collision_updates;
   r["render_snapshots"] = st.render_snapshots;
+  // How the session ended: at the path's end, with the erosion backlog finished within the
+  // drain limit (or how many burr positions it left undone).
+  r["session_end"] = {{"path_finished", st.path_finished},
+                      {"drain_time_s", st.drain_time_s},
+                      {"drain_limit_s", options.drain_limit_s},
+                      {"backlog_left_positions", st.backlog_left_positions},
+                      {"timed_out", st.timed_out},
+                      {"node_limit", options.erosion.max_nodes},
+                      {"node_limit_passes", st.node_limit_passes}};
   r["force"] = {{"peak_n", st.peak_force_n}, {"mean_in_contact_n", st.mean_force_n},
                 {"max_step_between_ticks_n", st.max_force_step_n}, {"ticks_in_contact", st.contact_ticks}};
   return r;

@@ -3,6 +3,7 @@
 #include "ido/drill/boundary_surface.h"
 
 #include <algorithm>
+#include <cmath>
 #include <atomic>
 #include <limits>
 #include <string>
@@ -677,6 +678,16 @@ std::size_t BoundarySurface::face_count() const noexcept {
   return n;
 }
 
+std::size_t BoundarySurface::memory_bytes() const noexcept {
+  std::size_t n = (m_chunks.capacity() + m_flat.capacity()) * sizeof(std::vector<SurfaceFace>);
+  for (const auto& root : m_chunks) {
+    n += root.capacity() * sizeof(std::vector<SurfaceFace>);
+    for (const auto& c : root) n += c.capacity() * sizeof(SurfaceFace);
+  }
+  for (const auto& flat : m_flat) n += flat.capacity() * sizeof(SurfaceFace);
+  return n;
+}
+
 const std::vector<SurfaceFace>& BoundarySurface::v_list(std::size_t r) const {
   if (m_flat_stale[r]) {
     auto& flat = m_flat[r];
@@ -1026,6 +1037,110 @@ std::uint32_t BoundarySurface::rebuild_range(const TetHierarchy& h, std::uint32_
   return std::max(requested_hi, hi);
 }
 
+namespace {
+
+// Union-find over triangle corners (3 t + k: corner k of triangle t).
+struct CornerSets {
+  std::vector<std::uint32_t> parent;
+  explicit CornerSets(std::size_t n) : parent(n) {
+    for (std::size_t i = 0; i < n; ++i) parent[i] = static_cast<std::uint32_t>(i);
+  }
+  std::uint32_t find(std::uint32_t i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  }
+  void join(std::uint32_t a, std::uint32_t b) { parent[find(a)] = find(b); }
+};
+
+// The corner of triangle t at vertex v.
+std::uint32_t corner_at(const geometry::TriangleMesh& m, std::size_t t, std::int32_t v) {
+  const auto& tri = m.triangles[t];
+  const std::size_t k = tri[0] == v ? 0 : (tri[1] == v ? 1 : 2);
+  return static_cast<std::uint32_t>(3 * t + k);
+}
+
+// Makes a closed, consistently oriented surface a 2-manifold without moving anything.
+// Where leaves touch along an edge only, that edge has 2k triangles; sorted by angle about
+// the edge they alternate in direction, and each triangle running against the edge's
+// direction bounds, with the next one counter-clockwise, one wedge of material: those two
+// are paired. Around every vertex the triangles joined through paired (or ordinary)
+// edges form fans; each fan after the first gets its own copy of the vertex. So an edge
+// shared by two wedges becomes one edge per wedge, and a vertex where parts touch at a point
+// becomes one vertex per part; positions (and so the enclosed volume) are unchanged.
+void split_edge_only_contacts(geometry::TriangleMesh& m) {
+  const std::size_t nt = m.triangles.size();
+  struct HalfEdge {
+    std::int32_t lo, hi;   // the edge's vertices, lo < hi
+    std::uint32_t tri;
+    bool forward;          // the triangle runs lo → hi
+    std::int32_t apex;     // the triangle's third vertex
+  };
+  std::vector<HalfEdge> he;
+  he.reserve(3 * nt);
+  for (std::size_t t = 0; t < nt; ++t) {
+    const auto& tr = m.triangles[t];
+    for (std::size_t k = 0; k < 3; ++k) {
+      const std::int32_t a = tr[k], b = tr[(k + 1) % 3];
+      he.push_back({std::min(a, b), std::max(a, b), static_cast<std::uint32_t>(t), a < b, tr[(k + 2) % 3]});
+    }
+  }
+  std::sort(he.begin(), he.end(), [](const HalfEdge& x, const HalfEdge& y) {
+    return std::tie(x.lo, x.hi, x.tri) < std::tie(y.lo, y.hi, y.tri);
+  });
+  CornerSets sets(3 * nt);
+  auto join_pair = [&](const HalfEdge& x, const HalfEdge& y) {
+    sets.join(corner_at(m, x.tri, x.lo), corner_at(m, y.tri, y.lo));
+    sets.join(corner_at(m, x.tri, x.hi), corner_at(m, y.tri, y.hi));
+  };
+  std::vector<std::pair<double, std::size_t>> around;
+  for (std::size_t i = 0; i < he.size();) {
+    std::size_t j = i;
+    while (j < he.size() && he[j].lo == he[i].lo && he[j].hi == he[i].hi) ++j;
+    const std::size_t n = j - i;
+    if (n == 2) {
+      join_pair(he[i], he[i + 1]);
+    } else if (n > 2 && n % 2 == 0) {
+      const Vec3& a = m.vertices[static_cast<std::size_t>(he[i].lo)];
+      const Vec3 d = (m.vertices[static_cast<std::size_t>(he[i].hi)] - a).normalized();
+      const Vec3 e1 = d.unitOrthogonal(), e2 = d.cross(e1);
+      around.clear();
+      for (std::size_t k = i; k < j; ++k) {
+        const Vec3 w = m.vertices[static_cast<std::size_t>(he[k].apex)] - a;
+        around.emplace_back(std::atan2(w.dot(e2), w.dot(e1)), k);
+      }
+      std::sort(around.begin(), around.end());
+      bool alternate = true;
+      for (std::size_t k = 0; k < n; ++k)
+        alternate = alternate && he[around[k].second].forward != he[around[(k + 1) % n].second].forward;
+      if (alternate)
+        for (std::size_t k = 0; k < n; ++k)
+          if (!he[around[k].second].forward) join_pair(he[around[k].second], he[around[(k + 1) % n].second]);
+    }
+    i = j;
+  }
+  // One vertex per fan: the first fan met keeps the vertex, the others get copies.
+  std::vector<std::int32_t> fan_vertex(3 * nt, -1);
+  std::vector<std::uint8_t> taken(m.vertices.size(), 0);
+  for (std::size_t t = 0; t < nt; ++t) {
+    for (std::size_t k = 0; k < 3; ++k) {
+      auto& v = m.triangles[t][k];
+      const std::uint32_t fan = sets.find(static_cast<std::uint32_t>(3 * t + k));
+      if (fan_vertex[fan] < 0) {
+        if (!taken[static_cast<std::size_t>(v)]) {
+          taken[static_cast<std::size_t>(v)] = 1;
+          fan_vertex[fan] = v;
+        } else {
+          fan_vertex[fan] = static_cast<std::int32_t>(m.vertices.size());
+          m.vertices.push_back(m.vertices[static_cast<std::size_t>(v)]);
+        }
+      }
+      v = fan_vertex[fan];
+    }
+  }
+}
+
+}  // namespace
+
 geometry::TriangleMesh assemble_surface(std::span<const std::vector<SurfaceFace>> v_lists,
                                         std::span<const Vec3> vertices_mm) {
   std::unordered_map<PointKey, std::int32_t, KeyHash> index;
@@ -1073,6 +1188,7 @@ geometry::TriangleMesh assemble_surface(std::span<const std::vector<SurfaceFace>
       }
     }
   }
+  split_edge_only_contacts(mesh);
   return mesh;
 }
 

@@ -285,6 +285,10 @@ Eroder::Enter Eroder::enter(TetHierarchy& h, const NodeRef& node, std::uint32_t 
     // node's depth is free: the frame of the node's parent keeps its own one level up).
     if (!would_remove_below(x, node.depth, finest, m_centre, m_radius, m_visits, m_children[node.depth]))
       return Enter::Done;
+    if (m_options.max_nodes > 0 && h.node_count() + 8 > m_options.max_nodes) {
+      stats.node_limit_reached = true;  // the leaf stays whole (coarser than asked)
+      return Enter::Done;
+    }
     m_frame_word[node.depth] = word;
     if (!h.refine_on_path(node, m_frame_word)) return Enter::Done;
     take_path_words(node);  // the parent's word (mask → group) and its ancestors' may change
@@ -367,6 +371,7 @@ void Eroder::drop_all(TetHierarchy& h, ErosionStats& stats) {
   m_active = false;
   m_queue.clear();
   m_queue_head = 0;
+  m_have_last = false;  // the positions were not finished: a repeat is new work
 }
 
 void Eroder::enqueue(const Vec3& centre_mm, double radius_mm, double pressing_force_n, double dt_s) {
@@ -380,6 +385,12 @@ void Eroder::enqueue(const Vec3& centre_mm, double radius_mm, double pressing_fo
     m_queue_head = 0;
   }
   const Sphere s{centre_mm, radius_mm};
+  // A resting burr: the same sphere again removes nothing once the last one is processed.
+  if (m_have_last && m_last.radius == radius_mm &&
+      (m_last.centre - centre_mm).norm() <= kRepeatTolerance * radius_mm)
+    return;
+  m_last = s;
+  m_have_last = true;
   const std::size_t waiting = m_queue.size() - m_queue_head;
   if (m_options.backlog_spacing > 0.0 && waiting >= 1) {
     // The position before the last queued one: the one queued before it, or the one in

@@ -7,6 +7,8 @@
 #include <sstream>
 #include <string>
 
+#include <fmt/format.h>
+
 #include "ido/core/error.h"
 
 namespace ido::drill {
@@ -24,6 +26,10 @@ ScriptedTrajectory::ScriptedTrajectory(std::vector<double> times_s, std::vector<
     if (i > 0 && !(m_times[i] > m_times[i - 1])) {
       throw InvalidInput("trajectory: times must increase strictly (keyframe " + std::to_string(i) + ")");
     }
+    if (m_times[i] > kMaxScriptDuration_s) {
+      throw InvalidInput(fmt::format("trajectory: time {:g} s at keyframe {} is beyond the longest script played in real time ({:g} s)",
+                                     m_times[i], i, kMaxScriptDuration_s));
+    }
     if (m_poses[i].orientation.norm() < 1e-12) throw InvalidInput("trajectory: zero quaternion at keyframe " + std::to_string(i));
     m_poses[i].orientation.normalize();
   }
@@ -36,28 +42,34 @@ ScriptedTrajectory ScriptedTrajectory::load_csv(const std::filesystem::path& pat
   std::vector<ToolPose> poses;
   std::string line;
   std::int64_t line_no = 0;
+  bool first_content = true;
+  const auto at_line = [&](std::int64_t n) { return FileLocation{.line = n, .byte_offset = std::nullopt}; };
   while (std::getline(in, line)) {
     ++line_no;
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line.find_first_not_of(" \t") == std::string::npos || line[line.find_first_not_of(" \t")] == '#') continue;
     std::vector<double> v;
+    std::vector<std::string> bad;  // the fields that are not numbers
     std::stringstream ss(line);
     std::string cell;
-    bool numeric = true;
     while (std::getline(ss, cell, ',')) {
+      double d = 0.0;
       try {
         std::size_t used = 0;
-        const double d = std::stod(cell, &used);
-        if (cell.find_first_not_of(" \t", used) != std::string::npos) numeric = false;
-        v.push_back(d);
+        d = std::stod(cell, &used);
+        if (cell.find_first_not_of(" \t", used) != std::string::npos) throw std::invalid_argument("trailing");
       } catch (const std::exception&) {
-        numeric = false;
-        break;
+        bad.push_back(cell);
+        continue;
       }
+      v.push_back(d);
     }
-    if (!numeric) {
-      if (times.empty() && poses.empty() && line_no == 1) continue;  // header
-      throw IoError(path.string(), "expected numbers t,x,y,z[,qx,qy,qz,qw]", {.line = line_no, .byte_offset = std::nullopt});
+    const bool header = first_content && v.empty();  // every field a name
+    first_content = false;
+    if (header) continue;
+    if (!bad.empty()) {
+      throw IoError(path.string(), "'" + bad.front() + "' is not a number (expected t,x,y,z[,qx,qy,qz,qw]; a header line has names only)",
+                    at_line(line_no));
     }
     if (v.size() != 4 && v.size() != 8) {
       throw IoError(path.string(), "expected 4 or 8 columns, found " + std::to_string(v.size()), {.line = line_no, .byte_offset = std::nullopt});
@@ -66,6 +78,11 @@ ScriptedTrajectory ScriptedTrajectory::load_csv(const std::filesystem::path& pat
       if (!std::isfinite(d)) throw IoError(path.string(), "non-finite value", {.line = line_no, .byte_offset = std::nullopt});
     if (!times.empty() && !(v[0] > times.back())) {
       throw IoError(path.string(), "time must increase strictly", {.line = line_no, .byte_offset = std::nullopt});
+    }
+    if (v[0] > kMaxScriptDuration_s) {
+      throw IoError(path.string(),
+                    fmt::format("time {:g} s is beyond the longest path played in real time ({:g} s)", v[0], kMaxScriptDuration_s),
+                    at_line(line_no));
     }
     ToolPose p;
     p.position_mm = Vec3(v[1], v[2], v[3]);

@@ -82,7 +82,8 @@ Simulator::Simulator(TetHierarchy& hierarchy, HapticDevice& device, const Simula
   for (const int priority : {options.haptic_realtime_priority, options.collision_realtime_priority}) {
     if (priority < 0 || priority > 99) throw InvalidInput("simulator: real-time priority must be in [0, 99] (0 = ordinary)");
   }
-  m_render_lists = m_surface.v_lists();
+  // The render copy is kept as chunks; render_v_lists() is flattened at stop() (building the
+  // surface's concatenated v_lists here would keep a third copy of every face for nothing).
   m_render_chunks.resize(hierarchy.root_count());
   for (std::size_t r = 0; r < hierarchy.root_count(); ++r) {
     m_render_chunks[r].resize(m_surface.chunk_count(r));
@@ -94,6 +95,25 @@ Simulator::Simulator(TetHierarchy& hierarchy, HapticDevice& device, const Simula
 }
 
 Simulator::~Simulator() { stop(); }
+
+SessionMemory Simulator::memory_use() const noexcept {
+  SessionMemory m;
+  m.nodes = m_hierarchy.node_storage_capacity_bytes();
+  m.hash = m_hierarchy.root_hash().memory_bytes();
+  m.v_lists = m_surface.memory_bytes();
+  for (const auto& root : m_render_chunks) {
+    m.v_lists += root.capacity() * sizeof(std::vector<SurfaceFace>);
+    for (const auto& c : root) m.v_lists += c.capacity() * sizeof(SurfaceFace);
+  }
+  for (const auto& l : m_render_lists) m.v_lists += l.capacity() * sizeof(SurfaceFace);
+  m.buffers = (m_tick_period.capacity() + m_tick_compute.capacity() + m_tick_force.capacity()) * sizeof(double);
+  const auto& st = m_stats;
+  m.buffers += (st.update_time_s.capacity() + st.haptic_period_s.capacity() + st.force_compute_time_s.capacity() +
+                st.erosion_visits.capacity()) *
+               sizeof(double);
+  m.buffers += sizeof(m_pose_buffer) + sizeof(m_contact_buffer) + sizeof(m_snapshots) + m_pending.capacity() * sizeof(ChunkId);
+  return m;
+}
 
 void Simulator::set_surface_snapshots(SurfaceSnapshotFn fn, double period_s, double end_s) {
   if (!(period_s > 0.0) || !std::isfinite(period_s)) throw InvalidInput("simulator: snapshot period must be positive");
@@ -114,6 +134,8 @@ void Simulator::start() {
   m_collision_done.store(false);
   m_finished.store(false);
   m_collision_exited.store(false);
+  m_path_over.store(false);
+  m_timed_out = false;
   m_stats = {};
   m_stats.surface_threads = m_surface.options().threads;
   m_start_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count();
@@ -136,6 +158,17 @@ void Simulator::stop() {
   m_collision.join();
   m_render.join();
   m_running = false;
+  m_stats.timed_out = m_timed_out;
+  // A drain cut short may leave v_list chunks unbuilt: build them, so the render copy
+  // matches the tree (the threads are joined; this thread owns everything now).
+  if (m_surface.has_pending()) {
+    m_surface.flush(m_hierarchy);
+    for (const ChunkId& c : m_surface.last_rebuilt_chunks()) {
+      auto& root = m_render_chunks[c.root];
+      if (root.size() < m_surface.chunk_count(c.root)) root.resize(m_surface.chunk_count(c.root));
+      root[c.chunk] = m_surface.chunk(c.root, c.chunk);
+    }
+  }
   m_render_lists.assign(m_render_chunks.size(), {});
   for (std::size_t r = 0; r < m_render_chunks.size(); ++r)
     for (const auto& c : m_render_chunks[r]) m_render_lists[r].insert(m_render_lists[r].end(), c.begin(), c.end());
@@ -155,16 +188,30 @@ void Simulator::stop() {
   m_stats.mean_force_n = m_stats.contact_ticks > 0 ? sum / static_cast<double>(m_stats.contact_ticks) : 0.0;
 }
 
-void Simulator::run(double timeout_s) {
+void Simulator::run(double timeout_s, Progress* progress) {
   start();
   const auto t0 = std::chrono::steady_clock::now();
+  const double duration = m_device.duration_s();
+  bool cancelled = false;
   while (!m_finished.load(std::memory_order_acquire)) {
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
-    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > timeout_s) break;
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (elapsed > timeout_s) {
+      m_timed_out = true;
+      break;
+    }
+    if (progress != nullptr) {
+      if (progress->cancelled()) {
+        cancelled = true;
+        break;
+      }
+      const bool draining = m_path_over.load(std::memory_order_acquire);
+      progress->update(draining ? 1.0 : (duration > 0.0 ? std::min(1.0, elapsed / duration) : 0.0),
+                       draining ? "finishing" : "drilling");
+    }
   }
-  // Let the collision thread process the final pose before stopping.
-  std::this_thread::sleep_for(std::chrono::milliseconds(20));
   stop();
+  check_cancel(cancelled ? progress : nullptr);
 }
 
 void Simulator::haptic_loop() {
@@ -241,9 +288,12 @@ void Simulator::collision_loop() {
   const double substep = m_options.max_substep_mm > 0.0 ? m_options.max_substep_mm : 0.25 * r;
   const std::size_t budget = m_options.erosion.max_node_visits;
   m_stats.collision_realtime = request_realtime(m_options.collision_realtime_priority);
+  bool path_over = false;  // a pose past the path's end was taken: no more erosion is queued
+  bool done = false;       // the backlog is finished (or the drain limit passed)
+  double drain_start = 0.0;
   while (!m_stop.load(std::memory_order_relaxed)) {
     const bool fresh = m_pose_buffer.has_new();
-    if (!fresh && !m_eroder.has_pending() && !m_surface.has_pending()) {
+    if (done || (!fresh && !m_eroder.has_pending() && !m_surface.has_pending())) {
       std::this_thread::sleep_for(std::chrono::microseconds(200));
       continue;
     }
@@ -254,7 +304,7 @@ void Simulator::collision_loop() {
       s = m_pose_buffer.read();
       new_pose = s.sequence != last_seq;
     }
-    if (new_pose) {
+    if (new_pose && !path_over) {
       last_seq = s.sequence;
       const Vec3 c = s.pose.position_mm;
       const double dt = have_last ? std::max(0.0, s.t_s - last_t) : 0.0;
@@ -265,11 +315,21 @@ void Simulator::collision_loop() {
       have_last = true;
       last_centre = c;
       last_t = s.t_s;
+      if (m_device.finished(s.t_s)) {
+        // The path is over: this pose (its end) was the last one queued; what is left is
+        // the backlog, finished within drain_limit_s.
+        path_over = true;
+        drain_start = t0;
+        m_path_over.store(true, std::memory_order_release);
+      }
+    } else if (new_pose) {
+      last_seq = s.sequence;
     } else if (!m_eroder.has_pending() && !m_surface.has_pending()) {
       continue;
     }
     const ErosionStats es = m_eroder.run(m_hierarchy, budget);
     m_stats.removed_volume_mm3 += es.removed_volume_mm3;
+    if (es.node_limit_reached) ++m_stats.node_limit_passes;
     m_stats.erosion_visits.push_back(static_cast<double>(es.nodes_visited));
     if (new_pose) m_contact_buffer.write(collide(m_hierarchy, m_tool, s.pose));
     // Changed v_list chunks: rebuild and hand them to the render consumer.
@@ -284,9 +344,18 @@ void Simulator::collision_loop() {
     m_stats.update_time_s.push_back(t1 - t0);
     ++m_stats.collision_updates;
     send_pending();
-    if (have_last && m_device.finished(last_t) && !m_eroder.has_pending() && !m_surface.has_pending())
-      m_collision_done.store(true, std::memory_order_release);
+    if (path_over) {
+      const bool drained = !m_eroder.has_pending() && !m_surface.has_pending();
+      if (drained || t1 - drain_start > m_options.drain_limit_s) {
+        m_stats.drain_time_s = t1 - drain_start;
+        m_stats.backlog_left_positions = m_eroder.unfinished();
+        m_stats.path_finished = true;
+        done = true;
+        m_collision_done.store(true, std::memory_order_release);
+      }
+    }
   }
+  if (!done) m_stats.backlog_left_positions = m_eroder.unfinished();
   // Hand over what is still pending (the render consumer runs until we have exited).
   while (!m_pending.empty()) {
     send_pending();

@@ -4,9 +4,12 @@
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
+#include <optional>
+#include <random>
 #include <string>
 #include <vector>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -203,6 +206,135 @@ TEST(DrillCli, BadInputIsExitTwoWithAMessage) {
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("--surface-threads"), std::string::npos) << r.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "o.vtu"));
+}
+
+// A bad path CSV, option or output: exit 2, one line on stderr naming @p what, and none of
+// the run's outputs (in @p dir: out.vtu, s.vtp, r.json) left behind.
+void expect_refused(const test::CommandResult& r, const std::filesystem::path& dir, const std::string& what) {
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find(what), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  for (const char* f : {"out.vtu", "s.vtp", "r.json"}) EXPECT_FALSE(std::filesystem::exists(dir / f)) << f;
+  for (const auto& e : std::filesystem::directory_iterator(dir))
+    EXPECT_EQ(e.path().filename().string().rfind(".tmp-", 0), std::string::npos) << e.path();
+}
+
+TEST(DrillCli, PathCsvIsCheckedLineByLine) {
+  const auto dir = test::scratch_dir("drill_cli_path_csv");
+  const auto block = block_and_path(dir, "block:8,8,4,2", "0,4,4,6\n");
+  const std::string outputs = " --surface " + (dir / "s.vtp").string() + " --report " + (dir / "r.json").string();
+  // A first line with numbers and a name is data with a bad field, not a header.
+  std::ofstream(dir / "path.csv") << "0,10,10,abc\n1,10,10,5\n";
+  expect_refused(drill_burr_1_5(block, dir, "out.vtu", outputs), dir, "path.csv:1");
+  std::ofstream(dir / "path.csv") << "t,x,y,z\n0,4,4,6\n0.2,4,4,x\n";
+  expect_refused(drill_burr_1_5(block, dir, "out.vtu", outputs), dir, "path.csv:3");
+  // A last time of 1e30 s would be played in real time for ever: refused, naming the line.
+  std::ofstream(dir / "path.csv") << "t,x,y,z\n0,4,4,6\n1e30,4,4,3\n";
+  const auto r = drill_burr_1_5(block, dir, "out.vtu", outputs);
+  expect_refused(r, dir, "path.csv:3");
+  EXPECT_NE(r.err.find("3600"), std::string::npos) << r.err;
+  // A header of names only is still taken.
+  std::ofstream(dir / "path.csv") << "time,x,y,z\n0,4,4,6\n0.1,4,4,5\n";
+  EXPECT_EQ(drill_burr_1_5(block, dir, "out.vtu", " --max-depth 2").exit_code, 0);
+}
+
+TEST(DrillCli, MinSizeBeyondTheHierarchyIsRefused) {
+  const auto dir = test::scratch_dir("drill_cli_min_size");
+  const auto block = block_and_path(dir, "block:8,8,4,2", "0,4,4,6\n0.1,4,4,5\n");
+  const auto r = drill_burr_1_5(block, dir, "out.vtu", " --min-size 1e-6 --report " + (dir / "r.json").string());
+  // Cells of 2 mm: tetrahedra 3.46 mm across need depth 22 for 1e-6 mm; 10 are allowed,
+  // so at least 3.46 / 1024 = 0.00338 mm.
+  expect_refused(r, dir, "--min-size");
+  EXPECT_NE(r.err.find("depth 22"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("0.00338"), std::string::npos) << r.err;
+}
+
+TEST(DrillCli, OutputsAreCheckedBeforeTheWorkAndWrittenAllOrNone) {
+  const auto dir = test::scratch_dir("drill_cli_outputs");
+  const auto block = block_and_path(dir, "block:8,8,4,2", "0,4,4,6\n0.1,4,4,5\n");
+  // An output that cannot be written is named before anything else is read: with the mesh
+  // missing too, the error is about the output, and no other output appears.
+  const auto missing = (dir / "missing.vtu").string();
+  auto r = test::run_tool("drill " + missing + " --tool sphere:radius=1.5 --path " + (dir / "path.csv").string() + " -o " +
+                          (dir / "out.vtu").string() + " --surface /proc/x.vtp --report " + (dir / "r.json").string());
+  expect_refused(r, dir, "/proc/x.vtp");
+  r = test::run_tool("drill " + missing + " --tool sphere:radius=1.5 --path " + (dir / "path.csv").string() +
+                     " -o /proc/x.vtu --surface " + (dir / "s.vtp").string() + " --report " + (dir / "r.json").string());
+  expect_refused(r, dir, "/proc/x.vtu");
+  r = drill_burr_1_5(block, dir, "out.vtu", " --surface " + (dir / "nowhere" / "s.vtp").string());
+  expect_refused(r, dir, "nowhere");
+}
+
+// `/usr/bin/python3 tests/drill/vtk_surface_check.py FILE` (VTK's vtkFeatureEdges and
+// vtkMassProperties), or nullopt without python3-vtk9.
+std::optional<nlohmann::json> vtk_surface_check(const std::filesystem::path& file) {
+  static const bool have_vtk = std::system("/usr/bin/python3 -c 'import vtkmodules.vtkIOXML' >/dev/null 2>&1") == 0;
+  if (!have_vtk) return std::nullopt;
+  const std::string cmd = "/usr/bin/python3 '" + (test::source_dir() / "tests/drill/vtk_surface_check.py").string() + "' '" +
+                          file.string() + "' 2>/dev/null";
+  FILE* pipe = ::popen(cmd.c_str(), "r");
+  if (pipe == nullptr) return std::nullopt;
+  std::string text;
+  char buf[4096];
+  std::size_t n = 0;
+  while ((n = std::fread(buf, 1, sizeof buf, pipe)) > 0) text.append(buf, n);
+  ::pclose(pipe);
+  return nlohmann::json::parse(text);
+}
+
+// Grooves that leave and re-enter the block (random paths) and a hole through a 2 mm plate:
+// VTK finds the drilled surfaces closed and edge-manifold, enclosing the remaining volume;
+// the session ends at the path's end with the backlog done, prints one summary line, and the
+// report's memory breakdown lies within the process's peak.
+TEST(DrillCli, DrilledSurfacesAreClosedManifoldsForVtk) {
+  const auto dir = test::scratch_dir("drill_cli_manifold");
+  for (unsigned seed = 1; seed <= 4; ++seed) {
+    SCOPED_TRACE(seed);
+    const bool plate = seed == 4;
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    std::string rows;
+    if (plate) {
+      rows = "0,5,5,4\n0.2,5,5,-2\n0.3,5,5,4\n0.4,7,6,4\n0.6,7,6,-2\n";
+    } else {
+      for (int k = 0; k < 5; ++k)
+        rows += fmt::format("{},{:.3f},{:.3f},{:.3f}\n", 0.1 * k, 12 * u(rng), 10 * u(rng),
+                            k % 2 == 0 ? 6.0 + 1.0 * u(rng) : 6.0 - 1.5 * u(rng));
+    }
+    const auto block = block_and_path(dir, plate ? "block:10,10,2,1" : "block:12,10,6,2", rows);
+    const auto r = drill_burr_1_5(block, dir, "out.vtu",
+                                  " --surface " + (dir / "s.vtp").string() + " --report " + (dir / "r.json").string() +
+                                      " --max-depth 4 --force-threshold 0");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    // One summary line.
+    EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << r.out;
+    EXPECT_EQ(r.out.rfind("drilled ", 0), 0U) << r.out;
+    std::ifstream in(dir / "r.json");
+    const auto rep = nlohmann::json::parse(in);
+    EXPECT_TRUE(rep["session_end"]["path_finished"].get<bool>());
+    EXPECT_EQ(rep["session_end"]["backlog_left_positions"].get<int>(), 0);
+    const auto& mem = rep["memory"];
+    const std::size_t parts = mem["nodes_bytes"].get<std::size_t>() + mem["v_lists_bytes"].get<std::size_t>() +
+                              mem["hash_bytes"].get<std::size_t>() + mem["buffers_bytes"].get<std::size_t>();
+    EXPECT_GT(mem["nodes_bytes"].get<std::size_t>(), 0U);
+    EXPECT_GT(mem["v_lists_bytes"].get<std::size_t>(), 0U);
+    EXPECT_LE(parts + mem["other_bytes"].get<std::size_t>(), mem["peak_rss_bytes"].get<std::size_t>());
+    const double remaining = rep["remaining_volume_mm3"];
+    const auto own = geometry::check_mesh(io::read_triangle_mesh(dir / "s.vtp"));
+    EXPECT_TRUE(own.closed);
+    EXPECT_EQ(own.non_manifold_edges, 0U);
+    EXPECT_EQ(own.non_manifold_vertices, 0U);
+    EXPECT_TRUE(test::rel_near(own.signed_volume_mm3, remaining, 1e-9));
+    const auto vtk = vtk_surface_check(dir / "s.vtp");
+    if (!vtk) GTEST_SKIP() << "python3-vtk9 not available";
+    EXPECT_EQ((*vtk)["boundary_edges"].get<int>(), 0);
+    EXPECT_EQ((*vtk)["non_manifold_edges"].get<int>(), 0);
+    EXPECT_TRUE(test::rel_near((*vtk)["volume"].get<double>(), remaining, 1e-6));
+  }
+  // -q: no summary line.
+  const auto q = drill_burr_1_5((dir / "block.vtu").string(), dir, "out.vtu", " --max-depth 2 -q");
+  ASSERT_EQ(q.exit_code, 0) << q.err;
+  EXPECT_TRUE(q.out.empty()) << q.out;
 }
 
 }  // namespace

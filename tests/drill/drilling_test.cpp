@@ -18,6 +18,7 @@
 #include "ido/drill/shapes.h"
 #include "ido/drill/tet_hierarchy.h"
 #include "ido/drill/tool.h"
+#include "ido/geometry/mesh_checks.h"
 #include "support/test_support.h"
 
 namespace ido::drill {
@@ -553,6 +554,109 @@ TEST(Erosion, BacklogKeepsPositionsAtMostTheSpacingApart) {
   const auto st = e.finish(h);
   EXPECT_FALSE(e.has_pending());
   EXPECT_GT(st.removed_volume_mm3, 0.0);
+}
+
+TEST(Erosion, RestingBurrAddsNoWork) {
+  // Once a position is processed, the same position again removes nothing: it is not queued,
+  // so a burr held still in contact leaves the backlog empty (the session can end).
+  TetHierarchy h(make_block({8, 8, 6}, 2.0));
+  Eroder e({.removal_rate_mm3_per_s = 0.0, .max_depth = 5, .max_node_visits = 500});
+  const Vec3 c(4, 4, 5.5);
+  e.erode(h, c, 1.5, 1.0, 1e-3);
+  (void)e.finish(h);
+  const double after_first = h.material_volume();
+  for (int i = 0; i < 1000; ++i) {
+    e.enqueue(c, 1.5, 1.0, 1e-3);
+    // What a scripted hold gives between two equal keyframes: (1 − a) c + a c.
+    const double a = 0.001 * i;
+    e.enqueue((1.0 - a) * c + a * c, 1.5, 1.0, 1e-3);
+    ASSERT_FALSE(e.has_pending()) << i;
+  }
+  EXPECT_EQ(h.material_volume(), after_first);
+  // A position that moved is new work.
+  e.enqueue(c + Vec3(0, 0, -0.2), 1.5, 1.0, 1e-3);
+  EXPECT_TRUE(e.has_pending());
+  EXPECT_GT(e.finish(h).removed_volume_mm3, 0.0);
+  // After a pass cut short by the volume budget the same position is queued again.
+  TetHierarchy g(make_block({8, 8, 6}, 2.0));
+  Eroder limited({.removal_rate_mm3_per_s = 10.0, .max_depth = 4});
+  const double full = g.material_volume();
+  for (int i = 0; i < 200; ++i) limited.erode(g, c, 1.5, 1.0, 1e-2);
+  (void)limited.finish(g);
+  // 2 s at 10 mm³/s: everything the burr covers (< 8 mm³ here) goes in the end.
+  TetHierarchy ref(make_block({8, 8, 6}, 2.0));
+  Eroder unlimited({.removal_rate_mm3_per_s = 0.0, .max_depth = 4});
+  unlimited.erode(ref, c, 1.5, 1.0, 0.0);
+  (void)unlimited.finish(ref);
+  EXPECT_TRUE(test::rel_near(full - g.material_volume(), full - ref.material_volume(), 1e-9));
+}
+
+TEST(Erosion, NodeLimitBoundsTheTree) {
+  // A fine level on a long path would refine without bound: max_nodes keeps the tree within it.
+  for (const std::size_t limit : {std::size_t(0), std::size_t(3000)}) {
+    TetHierarchy h(make_block({12, 8, 6}, 2.0));
+    Eroder e({.removal_rate_mm3_per_s = 0.0, .max_depth = 7, .max_node_visits = 0, .max_nodes = limit});
+    bool reached = false;
+    for (int i = 0; i <= 40; ++i) reached = e.erode(h, Vec3(2 + 0.2 * i, 4, 6), 1.2, 1.0, 1e-3).node_limit_reached || reached;
+    if (limit == 0) {
+      EXPECT_GT(h.node_count(), 3000U);  // the limit below does bind
+      EXPECT_FALSE(reached);
+    } else {
+      EXPECT_LE(h.node_count(), limit);
+      EXPECT_TRUE(reached);
+    }
+  }
+}
+
+// Vertices that share their position with another vertex (copies made by the split).
+std::size_t coincident_vertices(const geometry::TriangleMesh& m) {
+  std::vector<std::array<double, 3>> p;
+  for (const auto& v : m.vertices) p.push_back({v.x(), v.y(), v.z()});
+  std::sort(p.begin(), p.end());
+  std::size_t n = 0;
+  for (std::size_t i = 1; i < p.size(); ++i) n += p[i] == p[i - 1] ? 1U : 0U;
+  return n;
+}
+
+TEST(BoundarySurface, DrilledSurfacesAreClosedTwoManifolds) {
+  // Grooves that leave and re-enter a block and holes through a 2 mm plate make leaves that
+  // touch along an edge or at a point only; the assembled surface splits those contacts:
+  // closed, edge- and vertex-manifold, oriented, and enclosing exactly the leaves' volume.
+  std::size_t split = 0;
+  for (unsigned seed = 1; seed <= 16; ++seed) {
+    SCOPED_TRACE(seed);
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    const bool plate = seed % 2 == 0;
+    TetHierarchy h(plate ? make_block({10, 10, 2}, 1.0) : make_block({12, 10, 6}, 2.0));
+    const double r = plate ? 0.5 + 0.6 * u(rng) : 0.6 + 0.8 * u(rng);
+    Eroder e({.removal_rate_mm3_per_s = 0.0, .max_depth = plate ? 4 : 4 + static_cast<int>(seed % 3), .max_node_visits = 0});
+    std::vector<Vec3> path;
+    if (plate) {
+      for (int k = 0; k < 4; ++k) {  // vertical holes through the plate, and a slot between two
+        const Vec3 top(1.5 + 7 * u(rng), 1.5 + 7 * u(rng), 3.5);
+        path.push_back(top);
+        path.push_back(top - Vec3(0, 0, 5));
+      }
+    } else {
+      for (int k = 0; k < 7; ++k)  // dipping in and out of the top face
+        path.emplace_back(12 * u(rng), 10 * u(rng), k % 2 == 0 ? 6 + r * (0.5 + u(rng)) : 6 - r * (0.2 + 1.2 * u(rng)));
+    }
+    for (std::size_t k = 1; k < path.size(); ++k) {
+      const int n = std::max(1, static_cast<int>(std::ceil((path[k] - path[k - 1]).norm() / (0.25 * r))));
+      for (int i = 0; i <= n; ++i) e.erode(h, path[k - 1] + (path[k] - path[k - 1]) * (double(i) / n), r, 1.0, 1e-3);
+    }
+    const BoundarySurface surface(h);
+    const auto mesh = assemble_surface(surface.v_lists(), h.vertices());
+    const auto check = geometry::check_mesh(mesh);
+    EXPECT_TRUE(check.closed);
+    EXPECT_EQ(check.non_manifold_edges, 0U);
+    EXPECT_EQ(check.non_manifold_vertices, 0U);
+    EXPECT_TRUE(check.oriented);
+    EXPECT_TRUE(test::rel_near(check.signed_volume_mm3, h.material_volume(), 1e-9));
+    split += coincident_vertices(mesh);
+  }
+  EXPECT_GT(split, 0U);  // the paths do make edge- or point-only contacts
 }
 
 }  // namespace

@@ -116,6 +116,44 @@ TEST(Simulator, ScriptedSessionDrillsAndRenderCopyMatches) {
   }
 }
 
+// A plunge that ends with the burr resting in contact, at fine leaves (each burr position
+// there costs many collision updates of work): the session ends when the path ends, with the
+// backlog finished, and has removed what the path swept — the same volume as the eroder
+// fed the path's positions directly, and near the analytic swept volume.
+TEST(Simulator, PlungeAndHoldEndsWhenThePathEnds) {
+  const double r = 1.5;
+  std::vector<double> t{0.0, 0.3, 1.2};
+  std::vector<ToolPose> p(3);
+  p[0].position_mm = Vec3(6, 6, 10);
+  p[1].position_mm = Vec3(6, 6, 7);  // 1 mm below the top face (z = 8)
+  p[2].position_mm = p[1].position_mm;
+  ScriptedTrajectory device(t, p);
+  const ErosionOptions eo{.force_threshold_n = 0.0, .removal_rate_mm3_per_s = 0.0, .min_size_mm = 0.0625};
+  TetHierarchy h(make_block({12, 12, 8}, 2.0));
+  const double before = h.material_volume();
+  SimulatorOptions o;
+  o.tool.burr_radius_mm = r;
+  o.erosion = eo;
+  o.drain_limit_s = 30.0;
+  o.haptic_realtime_priority = 0;
+  Simulator sim(h, device, o);
+  sim.run(/*timeout_s=*/60.0);  // a safety net far above the drain limit
+  const auto& st = sim.stats();
+  EXPECT_TRUE(st.path_finished);
+  EXPECT_FALSE(st.timed_out);
+  EXPECT_EQ(st.backlog_left_positions, 0U);
+  const double removed = before - h.material_volume();
+  // Reference: the same vertical sweep eroded directly, positions r / 8 apart.
+  TetHierarchy ref(make_block({12, 12, 8}, 2.0));
+  Eroder e(eo);
+  for (int i = 0; i <= 24; ++i) e.erode(ref, Vec3(6, 6, 10 - 3.0 * i / 24.0), r, 1.0, 0.0);
+  (void)e.finish(ref);
+  const double expected = before - ref.material_volume();
+  EXPECT_TRUE(test::rel_near(removed, expected, 0.01)) << removed << " vs " << expected;
+  // Analytic: a cylinder 1 mm deep and the lower half-ball, 14.14 mm³ (leaves of 0.0625 mm).
+  EXPECT_TRUE(test::rel_near(removed, kPi * r * r * 1.0 + 2.0 / 3.0 * kPi * r * r * r, 0.05)) << removed;
+}
+
 TEST(BoundarySurface, WorkerThreadsRebuildTheSerialLists) {
   // The same random drilling fed to v_lists rebuilt by the calling thread alone, by 2 and by
   // 4 workers (more than the machine's cores). Unbudgeted, every update rewrites the same

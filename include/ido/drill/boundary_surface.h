@@ -114,6 +114,9 @@ class BoundarySurface {
   [[nodiscard]] std::size_t last_visits() const noexcept { return m_visits; }
   /// Faces over all v_lists.
   [[nodiscard]] std::size_t face_count() const noexcept;
+  /// Bytes held by the face lists: the chunk lists and the concatenated v_lists cached by
+  /// v_list() / v_lists() (capacities, so what is allocated).
+  [[nodiscard]] std::size_t memory_bytes() const noexcept;
   [[nodiscard]] const BoundarySurfaceOptions& options() const noexcept { return m_options; }
 
  private:
@@ -154,6 +157,10 @@ class BoundarySurface {
 /// The welded, crack-free triangle mesh (mm) of the faces in @p v_lists on mesh vertices
 /// @p vertices_mm: a face edge holding vertices of finer faces is split at them and the
 /// face is fanned from its centroid. Cell field "root" gives each triangle's root.
+/// The result is a closed 2-manifold (edge- and vertex-manifold), outward-oriented: where
+/// two parts of the material touch along an edge or at a point only, the edge's or the
+/// point's vertices are duplicated, one copy per part (same position, so the enclosed
+/// volume is unchanged; a format that welds by position, such as STL, joins them again).
 [[nodiscard]] geometry::TriangleMesh assemble_surface(std::span<const std::vector<SurfaceFace>> v_lists,
                                                       std::span<const Vec3> vertices_mm);
 

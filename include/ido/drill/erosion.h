@@ -46,6 +46,12 @@ struct ErosionOptions {
   /// radius of it: the backlog keeps positions at most that far apart, the same rule as the
   /// simulator's sub-steps (radius / 4), so the swept volume stays covered. ≤ 0: keep all.
   double backlog_spacing = 0.25;
+  /// Most nodes the hierarchy may hold (TetHierarchy::node_count()): a partly covered leaf
+  /// whose refinement would pass it stays whole, and ErosionStats::node_limit_reached says
+  /// so. Bounds the memory of a fine leaf size on a long path (nodes ≤ 4 bytes each, plus
+  /// about 100 bytes per boundary face of the v_lists). 0 = no limit. Default 2^23
+  /// (8 388 608 nodes; a depth-8 session on the reference traces uses ≈ 300 000).
+  std::size_t max_nodes = std::size_t(1) << 23;
 };
 
 /// What one erosion call did.
@@ -56,6 +62,7 @@ struct ErosionStats {
   bool rate_limited = false;  ///< the volume budget ran out before the burr's region was done
   std::size_t nodes_visited = 0;  ///< sphere tests made (work done)
   bool work_pending = false;      ///< the visit budget ran out: work carried over
+  bool node_limit_reached = false;  ///< a leaf was left whole at ErosionOptions::max_nodes
 };
 
 /// Removes material covered by a spherical burr (Turini et al. 2007: nodes in contact are
@@ -83,8 +90,18 @@ class Eroder {
   ErosionStats erode(TetHierarchy& hierarchy, const Vec3& centre_mm, double radius_mm, double pressing_force_n,
                      double dt_s);
   /// Queues a burr position (mm) when @p pressing_force_n reaches the threshold (and adds
-  /// rate · dt to the volume budget); otherwise does nothing.
+  /// rate · dt to the volume budget); otherwise does nothing. A position that repeats the
+  /// last one taken (same radius, centre within kRepeatTolerance × radius) is not queued
+  /// again: that sphere, once processed, removed everything it covers, so a burr resting in
+  /// contact adds no work (a session's backlog drains while the tool holds still). After a
+  /// pass cut short by the volume budget, or after the hierarchy's vertices moved
+  /// (TetHierarchy::set_vertex_positions; call forget_last_position()), a repeat is queued.
   void enqueue(const Vec3& centre_mm, double radius_mm, double pressing_force_n, double dt_s);
+  /// Relative distance (× radius) under which a new burr position repeats the last one.
+  static constexpr double kRepeatTolerance = 1e-9;
+  /// Makes the next position be queued even if it repeats the last one (the material under
+  /// it may have moved).
+  void forget_last_position() noexcept { m_have_last = false; }
   /// Processes queued work until the queue is empty or @p max_node_visits nodes were
   /// visited (0 = unlimited); what is left carries over.
   ErosionStats run(TetHierarchy& hierarchy, std::size_t max_node_visits);
@@ -94,6 +111,8 @@ class Eroder {
   [[nodiscard]] bool has_pending() const noexcept { return m_active || m_queue_head < m_queue.size(); }
   /// Burr positions waiting (not counting the one in progress).
   [[nodiscard]] std::size_t queued() const noexcept { return m_queue.size() - m_queue_head; }
+  /// Burr positions not finished: waiting, plus the one in progress.
+  [[nodiscard]] std::size_t unfinished() const noexcept { return queued() + (m_active ? 1U : 0U); }
 
   /// Nodes changed (erased — the topmost merged ancestor —, refined, or coarsened back)
   /// since the last clear_changed_roots(), possibly repeated; for
@@ -149,6 +168,8 @@ class Eroder {
   std::vector<Sphere> m_queue;
   std::size_t m_queue_head = 0;
   bool m_active = false;  // a sphere is in progress (m_centre, m_radius)
+  Sphere m_last;            // the last position taken (queued, in progress or done)
+  bool m_have_last = false;  // m_last is valid and was not dropped by the volume budget
   std::size_t m_next_candidate = 0;
   std::vector<Frame> m_stack;
   std::size_t m_visits = 0;

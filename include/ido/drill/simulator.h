@@ -8,6 +8,7 @@
 #include <thread>
 #include <vector>
 
+#include "ido/core/progress.h"
 #include "ido/drill/boundary_surface.h"
 #include "ido/drill/collision.h"
 #include "ido/drill/erosion.h"
@@ -56,6 +57,12 @@ struct SimulatorOptions {
   /// rebuilt yet wait for the next update, so the render copy lags by a few updates.
   /// Default 8000.
   std::size_t surface_visits_per_update = 8000;
+  /// Once the device reports the path finished, the collision thread takes the final pose,
+  /// queues no more erosion, and finishes the erosion backlog and the v_list rebuild for at
+  /// most this long (s, wall clock); what is still queued then is left undone and reported
+  /// (SessionStats::backlog_left_positions). Default 10 s; a plunge-and-hold at 0.0625 mm
+  /// leaves drains in well under 1 s (docs/drilling.md).
+  double drain_limit_s = 10.0;
 };
 
 /// A picture request of the render consumer: the boundary surface as the render consumer
@@ -69,6 +76,15 @@ struct Percentiles {
 };
 /// Percentiles of @p values (nearest rank).
 [[nodiscard]] Percentiles percentiles(std::vector<double> values);
+
+/// Where a session's memory goes (bytes allocated, capacities; see Simulator::memory_use).
+struct SessionMemory {
+  std::size_t nodes = 0;     ///< the hierarchy's node storage (TetHierarchy::node_storage_capacity_bytes)
+  std::size_t v_lists = 0;   ///< face lists: the authoritative chunks and the render consumer's copy
+  std::size_t hash = 0;      ///< the roots' spatial hash
+  std::size_t buffers = 0;   ///< timing and statistics records, hand-off buffers and the snapshot ring
+  [[nodiscard]] std::size_t total() const noexcept { return nodes + v_lists + hash + buffers; }
+};
 
 /// What a session measured.
 struct SessionStats {
@@ -90,6 +106,16 @@ struct SessionStats {
   double mean_force_n = 0.0;                  ///< over ticks in contact
   std::size_t contact_ticks = 0;
   double max_force_step_n = 0.0;             ///< largest change between consecutive ticks
+  /// Wall-clock time (s) from the path's end (the first pose past it) until the backlog was
+  /// finished or the drain limit stopped it; 0 when the session was stopped before.
+  double drain_time_s = 0.0;
+  /// Burr positions not eroded when the session ended (the drain limit, or stop() before the
+  /// path ended); 0 when every queued position was processed.
+  std::size_t backlog_left_positions = 0;
+  bool path_finished = false;  ///< the session reached the path's end
+  /// Erosion passes that left a leaf coarser than asked at ErosionOptions::max_nodes.
+  std::size_t node_limit_passes = 0;
+  bool timed_out = false;      ///< run() stopped at its timeout, before the session ended
 };
 
 /// A drilling session on three threads (Turini et al. 2007): a haptic thread at a fixed
@@ -122,8 +148,12 @@ class Simulator {
   void start();
   /// Stops and joins them (idempotent).
   void stop();
-  /// Starts, waits until the device reports finished (or @p timeout_s passes), stops.
-  void run(double timeout_s = 1e9);
+  /// Starts, waits until the device reports finished and the backlog is drained (or
+  /// @p timeout_s passes, then SessionStats::timed_out is set), stops. @p progress (may be
+  /// null) gets the path time over HapticDevice::duration_s() while the path runs, stage
+  /// "drilling", then "finishing"; its cancel() stops the session (ido::Cancelled is thrown
+  /// after stop()).
+  void run(double timeout_s = 1e9, Progress* progress = nullptr);
 
   /// Measurements (call after stop()).
   [[nodiscard]] const SessionStats& stats() const noexcept { return m_stats; }
@@ -132,6 +162,8 @@ class Simulator {
   /// The render consumer's copy of the v_lists (call after stop()).
   [[nodiscard]] const std::vector<std::vector<SurfaceFace>>& render_v_lists() const noexcept { return m_render_lists; }
   [[nodiscard]] const Tool& tool() const noexcept { return m_tool; }
+  /// The session's memory by part, as it is now (call after stop() for the final figures).
+  [[nodiscard]] SessionMemory memory_use() const noexcept;
 
  private:
   struct PoseSample {
@@ -176,6 +208,8 @@ class Simulator {
   std::atomic<bool> m_collision_done{false};
   std::atomic<bool> m_finished{false};
   std::atomic<bool> m_collision_exited{false};
+  std::atomic<bool> m_path_over{false};  // the collision thread took the path's last pose
+  bool m_timed_out = false;               // run() gave up at its timeout
   bool m_running = false;
   std::thread m_haptic, m_collision, m_render;
   std::int64_t m_start_ns = 0;
