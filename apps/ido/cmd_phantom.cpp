@@ -108,10 +108,13 @@ void setup(CLI::App& app, const GlobalOptions& /*g*/) {
   auto* sub = app.add_subcommand("phantom", "Write a synthetic CT volume (HU) with ground-truth labels");
   auto opts = std::make_shared<PhantomCliOptions>();
   sub->add_option("KIND", opts->kind,
-                  "sphere, torus, y-bifurcation, u-tube, vessel-near-bone, vessel-tree, vertebra, spine-aorta or calcified-vessel")
+                  "sphere, torus, y-bifurcation, u-tube, vessel-near-bone, vessel-tree, vertebra, spine-aorta, calcified-vessel; "
+                  "leak phantoms (label 1 = the intended organ only): valve-chamber (vessel into a chamber of the same "
+                  "grey level), vein-in-parenchyma (vein in a liver 15 HU darker), vertebra-stack (middle of three "
+                  "touching vertebrae), lung-seed (airway into air-filled lung)")
       ->required();
   sub->add_option("-o,--output", opts->output, "CT volume to write (.nii.gz, .nrrd, .mha)")->required();
-  sub->add_option("--labels", opts->labels, "Ground-truth label volume to write (1 = object; spine-aorta: 1 aorta, 2 vertebra; calcified-vessel: 1 vessel with plaque, 2 bone)");
+  sub->add_option("--labels", opts->labels, "Ground-truth label volume to write (1 = object; spine-aorta: 1 aorta, 2 vertebra; calcified-vessel: 1 vessel with plaque, 2 bone; vertebra-stack: 1 the middle vertebra)");
   sub->add_option("--noise", opts->noise_hu, "Gaussian noise sigma (HU)");
   sub->add_option("--noise-fraction", opts->noise_fraction, "Noise sigma as a fraction of the contrast (e.g. 0.2)");
   sub->add_option("--blur", opts->blur_voxels, "Gaussian blur sigma (voxels)");

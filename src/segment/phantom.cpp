@@ -10,6 +10,7 @@
 #include <cmath>
 #include <functional>
 #include <string>
+#include <tuple>
 
 #include <fmt/format.h>
 
@@ -49,6 +50,19 @@ double sd_cylinder_z(const Vec3& p, const Vec3& c, double r, double h) {
   const double dx = hypot2(p.x() - c.x(), p.y() - c.y()) - r;
   const double dz = std::abs(p.z() - c.z()) - h;
   return std::min(std::max(dx, dz), 0.0) + hypot2(std::max(dx, 0.0), std::max(dz, 0.0));
+}
+
+/// Axis-aligned box centred at c with half sizes h (exact distance).
+double sd_box(const Vec3& p, const Vec3& c, const Vec3& h) {
+  const Vec3 q = (p - c).cwiseAbs() - h;
+  return q.cwiseMax(0.0).norm() + std::min(q.maxCoeff(), 0.0);
+}
+
+/// Axis-aligned ellipsoid centred at c with semi-axes a: not the exact distance but a lower
+/// bound of it with the right sign, (|(p − c)/a| − 1) · min(a), since |∇ |(p − c)/a|| ≤
+/// 1 / min(a). Enough for the partial-volume test, which needs a lower bound.
+double sd_ellipsoid_bound(const Vec3& p, const Vec3& c, const Vec3& a) {
+  return ((p - c).cwiseQuotient(a).norm() - 1.0) * a.minCoeff();
 }
 
 /// One tissue painted over what lies below it where sdf < 0. With shell_mm > 0 the outer
@@ -110,6 +124,29 @@ Sdf vertebra_sdf(const Vec3& shift) {
     const double tl = sd_capsule(p, Vec3(21.1, 28.0, 20.1) + shift, Vec3(8.0, 24.0, 20.1) + shift, 3.0, 3.0);
     const double tr = sd_capsule(p, Vec3(43.1, 28.0, 20.1) + shift, Vec3(56.0, 24.0, 20.1) + shift, 3.0, 3.0);
     return std::min({b, ring, spinous, tl, tr});
+  };
+}
+
+/// Facet-joint processes added to vertebra_sdf(@p shift) for the VertebraStack. On each side
+/// of the canal (x = ±10.5 mm from its axis), a superior articular plate (4 × 4 mm in x, y;
+/// y 26–30 mm) rises from inside the ring to @p reach_mm above the vertebra's mid-plane, and
+/// an inferior plate reaches as far below it, 0.8 mm behind (y 21.2–25.2 mm). Vertebrae
+/// stacked 2·(reach_mm − 3) apart thus face each other across a 0.8 mm slit over 6 mm of
+/// height on each side: the upper one's inferior plate behind the lower one's superior plate.
+Sdf facet_sdf(const Vec3& shift, double reach_mm) {
+  const double z0 = 20.1 + shift.z();
+  // Mid-height and half-height of plates from 4 mm off the mid-plane (inside the ring, whose
+  // half-height is 6 mm) out to reach_mm.
+  const double zc = 0.5 * (4.0 + reach_mm), hz = 0.5 * (reach_mm - 4.0);
+  const Vec3 half(2.0, 2.0, hz);
+  return [=](const Vec3& p) {
+    double d = 1e300;
+    for (const double side : {-1.0, 1.0}) {
+      const double x = 32.1 + shift.x() + side * 10.5;
+      d = std::min(d, sd_box(p, Vec3(x, 28.0 + shift.y(), z0 + zc), half));        // superior
+      d = std::min(d, sd_box(p, Vec3(x, 23.2 + shift.y(), z0 - zc), half));        // inferior
+    }
+    return d;
   };
 }
 
@@ -258,6 +295,111 @@ Scene make_scene(PhantomKind kind, const PhantomOptions& o) {
                       "cylinder r 7 mm (label 2) 2 mm beside it";
       break;
     }
+    case PhantomKind::ValveChamber: {
+      // Aortic root leaving the left ventricle: a vessel (r 6 mm, label 1) along z from z = 4
+      // to the valve plane z = 44, where a soft-tissue ring (torus, tube r 1.5 mm on the
+      // vessel wall) narrows the lumen to r 4.5 mm; beyond it an ellipsoidal chamber
+      // (semi-axes 28, 25, 30 mm, centre 6 mm off the vessel's axis, floor cut flat at the
+      // valve plane) of the same 350 HU, not labelled.
+      s.extent_mm = {72, 72, 104};
+      const double rv = 6.0, ring = 1.5, z_valve = 44.0, z_start = 4.0;
+      const Vec3 axis(30.0, 36.0, 0.0), chamber(36.0, 36.0, 68.0), semi(28.0, 25.0, 30.0);
+      s.layers.push_back({[=](const Vec3& p) {
+                            return std::max(sd_ellipsoid_bound(p, chamber, semi), z_valve - p.z());
+                          },
+                          hu.vessel_hu, 0, 0.0, 0.0});
+      const Vec3 mid(axis.x(), axis.y(), 0.5 * (z_start + z_valve));
+      vessel([=](const Vec3& p) { return sd_cylinder_z(p, mid, rv, 0.5 * (z_valve - z_start)); });
+      const Vec3 valve(axis.x(), axis.y(), z_valve);
+      s.layers.push_back({[=](const Vec3& p) { return sd_torus_z(p, valve, rv, ring); }, hu.soft_tissue_hu, 0, 0.0, 0.0});
+      s.seeds_mm = {Vec3(axis.x(), axis.y(), 14.0)};  // 30 mm below the valve plane
+      // The cylinder less the quarter of the ring's tube inside it below the valve plane
+      // (Pappus: area π·ring²/4 at centroid radius rv − 4·ring/(3π)).
+      s.analytic_volume_mm3 = kPi * rv * rv * (z_valve - z_start) -
+                              2.0 * kPi * (rv - 4.0 * ring / (3.0 * kPi)) * (kPi * ring * ring / 4.0);
+      s.description = "vessel r 6 mm (label 1) through a valve ring (lumen r 4.5 mm) into an unlabelled "
+                      "chamber (ellipsoid 28 x 25 x 30 mm) of the same grey level";
+      break;
+    }
+    case PhantomKind::VeinInParenchyma: {
+      // IVC behind the liver: a vein (r 10 mm, label 1) along z; a liver-like ellipsoid
+      // (semi-axes 45, 35, 35 mm, not labelled) 15 HU darker whose surface passes 6 mm beyond
+      // the vein's axis at mid-height, so there the vein is wrapped in parenchyma over about
+      // 60 % of its circumference. The seed is where the vein runs clear of the liver.
+      s.extent_mm = {110, 84, 110};
+      s.object_hu = hu.vein_hu;
+      const double rv = 10.0;
+      const Vec3 a(22.0, 42.0, 14.0), b(22.0, 42.0, 96.0);
+      const Vec3 liver(22.0 - 6.0 + 45.0, 42.0, 62.0), semi(45.0, 35.0, 35.0);
+      s.layers.push_back({[=](const Vec3& p) { return sd_ellipsoid_bound(p, liver, semi); }, hu.parenchyma_hu, 0, 0.0, 0.0});
+      s.layers.push_back({[=](const Vec3& p) { return sd_capsule(p, a, b, rv, rv); }, hu.vein_hu, 1, 0.0, 0.0});
+      s.seeds_mm = {Vec3(a.x(), a.y(), 16.0)};  // 19 mm below the first contact with the liver
+      s.analytic_volume_mm3 = kPi * rv * rv * (b - a).norm() + 4.0 / 3.0 * kPi * rv * rv * rv;
+      s.description = fmt::format("vein r 10 mm, {:g} HU (label 1), partly embedded in an unlabelled liver-like "
+                                  "ellipsoid (45 x 35 x 35 mm) of {:g} HU",
+                                  hu.vein_hu, hu.parenchyma_hu);
+      break;
+    }
+    case PhantomKind::VertebraStack: {
+      // Three copies of the Vertebra phantom's vertebra 27.5 mm apart along z (24 mm bodies,
+      // 3.5 mm discs of disc_hu), each with facet plates (facet_sdf). A cortical osteophyte
+      // (capsule r 1.75 mm at the body's rim) bridges each disc: left rim below the middle
+      // vertebra, front rim above it. Label 1 = the middle vertebra (painted last).
+      s.extent_mm = {64, 72, 100};
+      const double step = 27.5, reach = 0.5 * step + 3.0;
+      const std::array<Vec3, 3> shift = {Vec3(0, 0, 4.0), Vec3(0, 0, 4.0 + step), Vec3(0, 0, 4.0 + 2.0 * step)};
+      // A vertebra with its facets lies within reach mm of its mid-plane (z = 20.1 + shift):
+      // beyond 8 mm more, the distance to that slab is a lower bound that spares the full SDF.
+      const auto bone = [&](const Vec3& sh) {
+        return [f = vertebra_sdf(sh), g = facet_sdf(sh, reach), z0 = 20.1 + sh.z(), reach](const Vec3& p) {
+          const double slab = std::abs(p.z() - z0) - reach;
+          return slab > 8.0 ? slab : std::min(f(p), g(p));
+        };
+      };
+      for (int d = 0; d < 2; ++d) {
+        const Vec3 mid(32.1, 50.0, 20.1 + shift[d].z() + 0.5 * step);
+        s.layers.push_back({[=](const Vec3& p) { return sd_cylinder_z(p, mid, 15.0, 2.0); }, hu.disc_hu, 0, 0.0, 0.0});
+      }
+      s.layers.push_back({bone(shift[0]), hu.cortical_hu, 0, 1.5, hu.cancellous_hu});
+      s.layers.push_back({bone(shift[2]), hu.cortical_hu, 0, 1.5, hu.cancellous_hu});
+      const double gap_lo = 20.1 + shift[0].z() + 12.0, gap_hi = 20.1 + shift[1].z() + 12.0;  // lower end plates
+      const Vec3 left_a(18.1, 50.0, gap_lo - 1.5), left_b(18.1, 50.0, gap_lo + step - 24.0 + 1.5);
+      const Vec3 front_a(32.1, 64.0, gap_hi - 1.5), front_b(32.1, 64.0, gap_hi + step - 24.0 + 1.5);
+      s.layers.push_back({[=](const Vec3& p) { return sd_capsule(p, left_a, left_b, 1.75, 1.75); }, hu.cortical_hu, 0, 0.0, 0.0});
+      s.layers.push_back({[=](const Vec3& p) { return sd_capsule(p, front_a, front_b, 1.75, 1.75); }, hu.cortical_hu, 0, 0.0, 0.0});
+      s.layers.push_back({bone(shift[1]), hu.cortical_hu, 1, 1.5, hu.cancellous_hu});
+      s.seeds_mm = {Vec3(32.1, 50.0, 20.1) + shift[1]};
+      s.drill_path_mm = pedicle_path(shift[1]);
+      s.object_hu = hu.cancellous_hu;
+      s.description = "three vertebrae along z (bodies r 15 x 24 mm, 3.5 mm discs of 80 HU) joined by a cortical "
+                      "osteophyte across each disc and 0.8 mm facet-joint gaps; label 1 = the middle vertebra "
+                      "(genus 1)";
+      break;
+    }
+    case PhantomKind::LungSeed: {
+      // Chest: a lung (ellipsoid, semi-axes 34, 30, 36 mm) in soft tissue, three vessels of
+      // soft-tissue HU (r 2, 1.5, 1 mm) across it, and an airway (label 1, r 6 mm): a trachea
+      // along z in the mediastinum, 8 mm clear of the lung, then a bronchus running 46° off
+      // it into the lung, where air meets lung with no wall. Seed in the trachea.
+      s.extent_mm = {96, 80, 100};
+      s.object_hu = hu.air_hu;
+      s.background_hu = hu.lung_hu;
+      const Vec3 lung(54.0, 40.0, 44.0), semi(34.0, 30.0, 36.0);
+      s.layers.push_back({[=](const Vec3& p) { return sd_ellipsoid_bound(p, lung, semi); }, hu.lung_hu, 0, 0.0, 0.0});
+      const std::array<std::tuple<Vec3, Vec3, double>, 3> vessels = {{{Vec3(40, 22, 20), Vec3(75, 30, 60), 2.0},
+                                                                      {Vec3(70, 56, 15), Vec3(45, 56, 65), 1.5},
+                                                                      {Vec3(36, 52, 48), Vec3(80, 46, 34), 1.0}}};
+      for (const auto& [va, vb, r] : vessels)
+        s.layers.push_back({[=](const Vec3& p) { return sd_capsule(p, va, vb, r, r); }, hu.soft_tissue_hu, 0, 0.0, 0.0});
+      const Vec3 top(16.0, 40.0, 92.0), carina(16.0, 40.0, 70.0), tip(58.0, 40.0, 30.0);
+      s.layers.push_back({[=](const Vec3& p) { return std::min(sd_capsule(p, top, carina, 6.0, 6.0), sd_capsule(p, carina, tip, 6.0, 6.0)); },
+                          hu.air_hu, 1, 0.0, 0.0});
+      s.seeds_mm = {Vec3(16.0, 40.0, 84.0)};
+      s.description = fmt::format("airway r 6 mm, {:g} HU (label 1): trachea in soft tissue, bronchus into an "
+                                  "unlabelled lung (ellipsoid 34 x 30 x 36 mm) of {:g} HU with three vessels r 1-2 mm",
+                                  hu.air_hu, hu.lung_hu);
+      break;
+    }
   }
   return s;
 }
@@ -294,6 +436,10 @@ std::string_view phantom_kind_name(PhantomKind kind) {
     case PhantomKind::Vertebra: return "vertebra";
     case PhantomKind::SpineAorta: return "spine-aorta";
     case PhantomKind::CalcifiedVessel: return "calcified-vessel";
+    case PhantomKind::ValveChamber: return "valve-chamber";
+    case PhantomKind::VeinInParenchyma: return "vein-in-parenchyma";
+    case PhantomKind::VertebraStack: return "vertebra-stack";
+    case PhantomKind::LungSeed: return "lung-seed";
   }
   return "unknown";
 }
@@ -303,8 +449,9 @@ PhantomKind parse_phantom_kind(std::string_view name) {
   for (char& c : n) c = c == '_' ? '-' : char(std::tolower(static_cast<unsigned char>(c)));
   std::string valid;
   std::vector<PhantomKind> kinds = all_phantom_kinds();
-  kinds.push_back(PhantomKind::SpineAorta);
-  kinds.push_back(PhantomKind::CalcifiedVessel);
+  for (PhantomKind k : {PhantomKind::SpineAorta, PhantomKind::CalcifiedVessel, PhantomKind::ValveChamber,
+                        PhantomKind::VeinInParenchyma, PhantomKind::VertebraStack, PhantomKind::LungSeed})
+    kinds.push_back(k);
   for (PhantomKind k : kinds) {
     if (n == phantom_kind_name(k)) return k;
     valid += (valid.empty() ? "" : ", ") + std::string(phantom_kind_name(k));
