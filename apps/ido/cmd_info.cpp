@@ -16,7 +16,9 @@
 namespace ido::cli {
 namespace {
 
-using nlohmann::json;
+// Insertion order, which is reading order: what the file is, its size and geometry, then
+// statistics and checks (nlohmann::json would sort the keys: p25 before p5).
+using json = nlohmann::ordered_json;
 
 struct InfoOptions {
   std::string input;

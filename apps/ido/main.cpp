@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <exception>
+#include <string>
 
 #include <CLI/CLI.hpp>
 #include <spdlog/sinks/stdout_color_sinks.h>
@@ -14,6 +15,7 @@
 #include "ido/core/error.h"
 #include "ido/core/log.h"
 #include "ido/core/memory.h"
+#include "ido/io/memory_budget.h"
 
 namespace ido::cli {
 
@@ -44,6 +46,9 @@ int main(int argc, char** argv) {
   GlobalOptions global;
   app.add_flag("-v,--verbose", global.verbose, "Log details to stderr");
   app.add_flag("-q,--quiet", global.quiet, "Only errors on stderr, no progress bar");
+  std::string memory_limit;
+  app.add_option("--memory-limit", memory_limit,
+                 "Largest buffer a file may declare, e.g. 8G or 512M (default: 3/4 of physical memory)");
 
   auto& commands = registered_commands();
   std::stable_sort(commands.begin(), commands.end(),
@@ -56,6 +61,8 @@ int main(int argc, char** argv) {
   logger->set_level(spdlog::level::warn);
   ido::set_logger(logger);
   app.parse_complete_callback([&] {
+    if (!memory_limit.empty())
+      ido::io::set_memory_limit_bytes(ido::io::parse_memory_size(memory_limit, "--memory-limit"));
     logger->set_level(global.quiet     ? spdlog::level::err
                       : global.verbose ? spdlog::level::debug
                                        : spdlog::level::info);

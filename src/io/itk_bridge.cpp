@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <regex>
 
 #include <fmt/format.h>
 #include <itkGDCMImageIO.h>
@@ -19,10 +20,12 @@
 #include <itkMetaImageIO.h>
 #include <itkNiftiImageIO.h>
 #include <itkNrrdImageIO.h>
+#include <nifti1_io.h>
 
 #include "ido/core/error.h"
 #include "ido/core/memory.h"
 #include "ido/core/parallel.h"
+#include "ido/io/memory_budget.h"
 
 namespace ido::io::detail {
 namespace {
@@ -47,22 +50,40 @@ itk::ImageIOBase::Pointer make_io(VolumeKind kind) {
   return nullptr;
 }
 
-/// ITK prints warnings through its output window; the library must stay silent.
+/// ITK prints warnings through its output window, and niftilib its own to stderr ("++ WARNING:
+/// nifti_read_buffer ..."); the library must stay silent (its checks report instead).
 void silence_itk() {
   static const bool done = [] {
     itk::Object::GlobalWarningDisplayOff();
+    nifti_set_debug_level(0);
     return true;
   }();
   (void)done;
 }
 
-/// ITK's description of an exception, trimmed.
+/// ITK's description of an exception as one line in plain words: without ITK's
+/// "ITK ERROR: NrrdImageIO(0x55d0…): " prefix, and for a teem (NRRD) error chain
+/// ("[nrrd] nrrdLoad: trouble …\n[nrrd] _nrrdReadNrrdParse_sizes: couldn't parse …") only
+/// its last link, the cause, without the function name.
 std::string itk_problem(const itk::ExceptionObject& e) {
-  std::string d = e.GetDescription();
-  while (!d.empty() && (d.back() == '\n' || d.back() == ' ')) d.pop_back();
+  static const std::regex kPrefix(R"((ITK ERROR: )?\w+ ?\(0x[0-9a-fA-F]+\): )");
+  static const std::regex kTeem(R"(\[\w+\] \w+: )");
+  std::string d = std::regex_replace(e.GetDescription(), kPrefix, "");
+  if (d.find("[nrrd]") != std::string::npos || d.find("[air]") != std::string::npos) {
+    std::string last;
+    std::size_t pos = 0;
+    while (pos < d.size()) {
+      const auto end = std::min(d.find('\n', pos), d.size());
+      std::string line = d.substr(pos, end - pos);
+      if (std::regex_search(line, kTeem)) last = std::regex_replace(line, kTeem, "");
+      pos = end + 1;
+    }
+    if (!last.empty()) d = last;
+  }
+  while (!d.empty() && (d.back() == '\n' || d.back() == ' ' || d.back() == ':')) d.pop_back();
   // One line: the CLI reports errors as a single line.
   for (auto& c : d)
-    if (c == '\n' || c == '\r') c = ' ';
+    if (c == '\n' || c == '\r' || c == '\t') c = ' ';
   return d.empty() ? std::string("ITK could not process the file") : d;
 }
 
@@ -132,8 +153,15 @@ void write_typed(const std::string& file_name, const std::string& shown, VolumeK
 
 }  // namespace
 
-RawVolume itk_read_file(const std::string& path, VolumeKind kind) {
-  silence_itk();
+namespace {
+
+/// Refuses a grid whose float voxels would exceed the memory budget, before ITK allocates.
+void check_grid_budget(const std::string& path, std::uint64_t nx, std::uint64_t ny, std::uint64_t nz) {
+  check_memory_budget(path, saturating_product({nx, ny, nz, sizeof(float)}),
+                      fmt::format("{}×{}×{} voxels", nx, ny, nz));
+}
+
+RawVolume read_file(const std::string& path, VolumeKind kind) {
   auto io = make_io(kind);
   io->SetFileName(path);
   try {
@@ -141,9 +169,12 @@ RawVolume itk_read_file(const std::string& path, VolumeKind kind) {
       throw IoError(path, fmt::format("not a readable {} file (bad header or magic)", format_name(kind)));
     io->ReadImageInformation();
   } catch (const itk::ExceptionObject& e) {
-    throw IoError(path, itk_problem(e));
+    throw IoError(path, fmt::format("bad {} header: {}", format_name(kind), itk_problem(e)));
   }
+  if (io->GetComponentType() == itk::IOComponentEnum::UNKNOWNCOMPONENTTYPE)
+    throw IoError(path, "unknown or unsupported voxel type (ElementType / type field)");
   const unsigned dims = io->GetNumberOfDimensions();
+  if (dims < 1) throw IoError(path, "the header declares no image axes");
   for (unsigned d = 3; d < dims; ++d)
     if (io->GetDimensions(d) > 1)
       throw IoError(path, fmt::format("{}D image with {} samples along axis {}; expected a 3D volume",
@@ -151,21 +182,27 @@ RawVolume itk_read_file(const std::string& path, VolumeKind kind) {
   if (io->GetNumberOfComponents() != 1)
     throw IoError(path, fmt::format("{} components per voxel; expected a scalar volume",
                                     io->GetNumberOfComponents()));
-  // ITK reads a too-short uncompressed file without complaint: check its size first.
+  std::uint64_t n[3] = {1, 1, 1};
+  std::array<double, 3> spacing{1.0, 1.0, 1.0};
+  for (unsigned d = 0; d < std::min(dims, 3u); ++d) {
+    n[d] = io->GetDimensions(d);
+    spacing[d] = io->GetSpacing(d);
+  }
+  // Before ITK's reader, which refuses a spacing of 0 in words of its own.
+  check_volume_spacing(path, spacing);
+  check_grid_budget(path, n[0], n[1], n[2]);
+  // ITK reads a too-short uncompressed MetaImage without complaint: check its size first
+  // (NIfTI files are checked by volume_io.cpp through nifti_header.h).
   bool uncompressed = false;
-  if (kind == VolumeKind::Nifti) {
-    uncompressed = path.size() < 3 || path.compare(path.size() - 3, 3, ".gz") != 0;
-  } else if (kind == VolumeKind::Meta) {
+  if (kind == VolumeKind::Meta) {
     auto* meta = dynamic_cast<itk::MetaImageIO*>(io.GetPointer());
     uncompressed = meta && !meta->GetMetaImagePointer()->CompressedData() &&
                    std::string(meta->GetMetaImagePointer()->ElementDataFileName()) == "LOCAL";
   }
   std::error_code ec;
   const auto file_size = std::filesystem::file_size(path, ec);
-  // A single-file NIfTI-1 header takes at least 352 bytes before the voxels.
-  const std::uintmax_t header_bytes = kind == VolumeKind::Nifti ? 352 : 0;
   const auto voxel_bytes = static_cast<std::uintmax_t>(io->GetImageSizeInBytes());
-  if (uncompressed && !ec && file_size < header_bytes + voxel_bytes)
+  if (uncompressed && !ec && file_size < voxel_bytes)
     throw IoError(path, fmt::format("file has {} bytes, too few for the {} bytes of voxels its header declares (truncated?)",
                                     file_size, voxel_bytes));
   auto reader = itk::ImageFileReader<FloatImage>::New();
@@ -181,6 +218,18 @@ RawVolume itk_read_file(const std::string& path, VolumeKind kind) {
   out.pixel_type = component_name(io->GetComponentType());
   out.components = 1;
   return out;
+}
+
+}  // namespace
+
+RawVolume itk_read_file(const std::string& path, VolumeKind kind) {
+  silence_itk();
+  try {
+    return read_file(path, kind);
+  } catch (const itk::ExceptionObject& e) {
+    // Any ITK call not wrapped above (e.g. a size query on an odd header): still one line.
+    throw IoError(path, itk_problem(e));
+  }
 }
 
 namespace {
@@ -276,6 +325,10 @@ RawVolume itk_read_dicom_folder(const std::string& dir) {
     reader->UpdateOutputInformation();
   } catch (const itk::ExceptionObject& e) {
     throw IoError(dir, "cannot read DICOM series: " + itk_problem(e));
+  }
+  {
+    const auto sz = reader->GetOutput()->GetLargestPossibleRegion().GetSize();
+    check_grid_budget(dir, sz[0], sz[1], sz[2]);
   }
   if (gdcm->GetNumberOfComponents() != 1)
     throw IoError(dir, fmt::format("DICOM series has {} components per voxel, expected 1",

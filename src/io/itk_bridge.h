@@ -32,6 +32,11 @@ struct RawVolume {
 enum class VolumeKind { Nifti, Nrrd, Meta, Unknown };
 enum class PixelKind { Float32, UInt8, Int16 };
 
+/// The one spacing rule of every volume reader (defined in volume_io.cpp, called by the
+/// readers before they allocate and again on every volume read): each spacing positive and
+/// finite. @throws ido::IoError "PATH: spacing 1 × 0 × 1 mm is not positive and finite".
+void check_volume_spacing(const std::string& path, const std::array<double, 3>& spacing_mm);
+
 /// Reads a volume file of the given kind. @throws ido::IoError.
 RawVolume itk_read_file(const std::string& path, VolumeKind kind);
 /// Reads the single DICOM series of a folder. @throws ido::IoError (none, several, bad).

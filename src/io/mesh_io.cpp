@@ -64,25 +64,9 @@ void validate(const geometry::TetMesh& mesh, const std::string& name,
   check_indices(mesh.tets, mesh.vertices.size(), name, "tetrahedron", element_lines);
   check_fields(mesh.point_fields, mesh.vertices.size(), name, "point");
   check_fields(mesh.cell_fields, mesh.tets.size(), name, "cell");
-  for (std::size_t e = 0; e < mesh.tets.size(); ++e) {
-    const auto& t = mesh.tets[e];
-    const Vec3& a = mesh.vertices[static_cast<std::size_t>(t[0])];
-    const Vec3 ab = mesh.vertices[static_cast<std::size_t>(t[1])] - a;
-    const Vec3 ac = mesh.vertices[static_cast<std::size_t>(t[2])] - a;
-    const Vec3 ad = mesh.vertices[static_cast<std::size_t>(t[3])] - a;
-    const double six_v = ab.dot(ac.cross(ad));
-    const double l = std::max({ab.norm(), ac.norm(), ad.norm(), (ac - ab).norm(), (ad - ab).norm(), (ad - ac).norm()});
-    const FileLocation where{.line = line_of(element_lines, e), .byte_offset = std::nullopt};
-    // Degenerate: volume below 1e-9 of the cube of the longest edge (relative, so that it
-    // does not depend on units), which also catches repeated vertices.
-    if (!(std::abs(six_v) > 1e-9 * l * l * l))
-      invalid(name, fmt::format("tetrahedron {} ({} {} {} {}) is degenerate (zero volume)", e, t[0], t[1], t[2], t[3]),
-              where);
-    if (six_v < 0.0)
-      invalid(name, fmt::format("tetrahedron {} ({} {} {} {}) is inverted (negative volume {:.6g} mm^3)", e, t[0],
-                                t[1], t[2], t[3], six_v / 6.0),
-              where);
-  }
+  // Inverted or degenerate tetrahedra are read as they are: a simulation frame may hold them,
+  // and geometry::check_tet_mesh (`ido info`) counts them. Users that need positive volumes
+  // (sim::World, the drill's hierarchy) check their own input.
 }
 }  // namespace detail
 

@@ -3,7 +3,9 @@
 
 #include <zlib.h>
 
+#include <bit>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <memory>
 #include <vector>
@@ -43,7 +45,11 @@ struct GzFile {
   std::string error() const {
     int code = Z_OK;
     const char* msg = gzerror(f, &code);
-    return code == Z_OK || code == Z_STREAM_END ? std::string() : std::string(msg ? msg : "zlib error");
+    if (code == Z_OK || code == Z_STREAM_END) return {};
+    // zlib prefixes the path ("x.nii.gz: unexpected end of file"); the caller names the file.
+    std::string why = msg ? msg : "zlib error";
+    if (const auto colon = why.rfind(": "); colon != std::string::npos) why = why.substr(colon + 2);
+    return why;
   }
 };
 
@@ -106,13 +112,15 @@ NiftiHeader read_nifti_header(const std::string& path) {
   const int n = gzread(in.f, buf.data(), static_cast<unsigned>(buf.size()));
   if (n < 0) throw IoError(path, fmt::format("cannot decompress the NIfTI header: {}", in.error()));
   buf.resize(static_cast<std::size_t>(n));
-  if (buf.size() < 348 && !in.error().empty() && buf.size() >= 4 && gz_name(path))
-    throw IoError(path, fmt::format("gzip stream is cut short inside the NIfTI header ({} of 348 bytes): {}", buf.size(),
-                                    in.error()));
+  if (buf.size() < 348 && !in.error().empty())
+    throw IoError(path, fmt::format("gzip stream is cut short inside the NIfTI header ({} of 348 bytes; {})",
+                                    buf.size(), in.error()));
   return parse_nifti_header(buf, path);
 }
 
-void check_nifti_voxel_bytes(const std::string& path, const NiftiHeader& header) {
+bool nifti_is_float(const NiftiHeader& header) { return header.datatype == 16 || header.datatype == 64; }
+
+NiftiVoxelScan check_nifti_voxels(const std::string& path, const NiftiHeader& header) {
   const std::uint64_t needed = header.voxel_offset > UINT64_MAX - header.voxel_bytes
                                    ? UINT64_MAX
                                    : header.voxel_offset + header.voxel_bytes;
@@ -121,21 +129,47 @@ void check_nifti_voxel_bytes(const std::string& path, const NiftiHeader& header)
                                      "(truncated?)",
                                      how, have, header.voxel_bytes, header.voxel_offset));
   };
+  const bool is_float = nifti_is_float(header);
   if (!gz_name(path)) {
     std::error_code ec;
     const auto size = std::filesystem::file_size(path, ec);
     if (ec) throw IoError(path, "cannot read the file size: " + ec.message());
     if (size < needed) throw short_of(size, "file has");
-    return;
+    if (!is_float) return {};
   }
   GzFile in(path);
   if (!in.f) throw IoError(path, "cannot open for reading");
   gzbuffer(in.f, 1u << 18);
-  std::vector<char> chunk(std::size_t(1) << 18);
-  std::uint64_t total = 0;
+  // Chunks are a multiple of 8 bytes, so after the header every chunk but the last holds
+  // whole values.
+  std::vector<unsigned char> chunk(std::size_t(1) << 18);
+  const int width = header.bytes_per_voxel;
+  const bool swap = header.big_endian != (std::endian::native == std::endian::big);
+  NiftiVoxelScan scan;
+  std::uint64_t total = 0, value_index = 0;
   while (total < needed) {
-    const auto want = static_cast<unsigned>(std::min<std::uint64_t>(chunk.size(), needed - total));
+    // The header is read on its own, so that the voxels start at a chunk's beginning.
+    const std::uint64_t until = total < header.voxel_offset ? header.voxel_offset : needed;
+    const auto want = static_cast<unsigned>(std::min<std::uint64_t>(chunk.size(), until - total));
     const int n = gzread(in.f, chunk.data(), want);
+    if (n > 0 && is_float && total >= header.voxel_offset) {
+      const std::size_t values = static_cast<std::size_t>(n) / static_cast<std::size_t>(width);
+      for (std::size_t v = 0; v < values; ++v, ++value_index) {
+        bool bad = false;
+        if (width == 4) {
+          std::uint32_t bits;
+          std::memcpy(&bits, chunk.data() + v * 4, 4);
+          if (swap) bits = __builtin_bswap32(bits);
+          bad = (bits & 0x7f800000u) == 0x7f800000u;
+        } else {
+          std::uint64_t bits;
+          std::memcpy(&bits, chunk.data() + v * 8, 8);
+          if (swap) bits = __builtin_bswap64(bits);
+          bad = (bits & 0x7ff0000000000000ull) == 0x7ff0000000000000ull;
+        }
+        if (bad && scan.non_finite++ == 0) scan.first_non_finite = value_index;
+      }
+    }
     if (n > 0) total += static_cast<std::uint64_t>(n);
     if (n < static_cast<int>(want)) {
       const std::string why = in.error();
@@ -146,6 +180,7 @@ void check_nifti_voxel_bytes(const std::string& path, const NiftiHeader& header)
       throw short_of(total, "decompresses to");
     }
   }
+  return scan;
 }
 
 }  // namespace ido::io::detail

@@ -40,10 +40,21 @@ NiftiHeader parse_nifti_header(std::string_view bytes, const std::string& name);
 /// Reads and parses the header of @p path (.nii or .nii.gz). @throws ido::IoError.
 NiftiHeader read_nifti_header(const std::string& path);
 
-/// Checks that @p path holds all of the voxel bytes @p header declares: the file size of a
-/// .nii, the decompressed length of a .nii.gz (read through zlib up to the last byte needed;
-/// a gzip stream that is cut short or corrupt is reported as such).
+/// True for float32 and float64 data, whose non-finite values niftilib silently turns into 0.
+[[nodiscard]] bool nifti_is_float(const NiftiHeader& header);
+
+/// What check_nifti_voxels found among float voxels (none for integer data).
+struct NiftiVoxelScan {
+  std::uint64_t non_finite = 0;        ///< NaN or ±inf values
+  std::uint64_t first_non_finite = 0;  ///< linear index of the first one
+};
+
+/// Checks that @p path holds all of the voxel bytes @p header declares: the file size of an
+/// integer .nii; otherwise the data are streamed through zlib (a few hundred KiB at a time)
+/// up to the last byte needed — a .nii.gz's decompressed length, and for float data every
+/// value, counting the non-finite ones. A gzip stream that is cut short or corrupt is
+/// reported as such.
 /// @throws ido::IoError naming @p path, the bytes found and the bytes declared.
-void check_nifti_voxel_bytes(const std::string& path, const NiftiHeader& header);
+NiftiVoxelScan check_nifti_voxels(const std::string& path, const NiftiHeader& header);
 
 }  // namespace ido::io::detail

@@ -40,8 +40,8 @@ void write_gmsh_triangles(std::ostream& out, const geometry::TriangleMesh& mesh,
 void write_tetgen_node(std::ostream& out, const geometry::TetMesh& mesh);
 void write_tetgen_ele(std::ostream& out, const geometry::TetMesh& mesh);
 
-/// Checks a parsed mesh: finite coordinates, indices in range, and for tetrahedra positive
-/// non-degenerate volume. @p element_lines (optional) gives each element's 1-based line
+/// Checks a parsed mesh: finite coordinates, indices in range, field sizes. Inverted or
+/// degenerate tetrahedra are accepted (geometry::check_tet_mesh reports them). @p element_lines (optional) gives each element's 1-based line
 /// for the message. @throws ido::InvalidInput naming @p name, the element and the problem.
 void validate(const geometry::TriangleMesh& mesh, const std::string& name,
               const std::vector<std::int64_t>& vertex_lines = {},

@@ -27,6 +27,7 @@
 #include "ido/sim/mls.h"
 #include "ido/sim/shape_matching.h"
 #include "ido/sim/units.h"
+#include "parsers.h"
 
 namespace ido::io {
 
@@ -445,8 +446,21 @@ Scene parse_scene(std::string_view json_text, const std::string& source_name,
   try {
     root = json::parse(json_text);
   } catch (const json::parse_error& e) {
-    throw IoError(source_name, std::string("not valid JSON: ") + e.what(),
-                  FileLocation{std::nullopt, static_cast<std::int64_t>(e.byte)});
+    // nlohmann's text is "[json.exception.parse_error.101] parse error at line 3, column 5:
+    // syntax error while parsing object key - unexpected '}'; expected string literal": keep
+    // the part after the position, and give the position as ido does ("scene.json:3: ...").
+    std::string why = e.what();
+    if (const auto pe = why.find("parse error"); pe != std::string::npos)
+      if (const auto colon = why.find(": ", pe); colon != std::string::npos) why = why.substr(colon + 2);
+    // Line and column of the byte where parsing stopped (e.byte is 1-based; 0 for empty input).
+    const std::size_t stop = std::min<std::size_t>(e.byte > 0 ? e.byte - 1 : 0, json_text.size());
+    const auto line = 1 + std::count(json_text.begin(), json_text.begin() + static_cast<std::ptrdiff_t>(stop), '\n');
+    const auto line_start = json_text.rfind('\n', stop == 0 ? 0 : stop - 1);
+    const std::size_t column = line_start == std::string_view::npos || stop == 0 ? stop + 1 : stop - line_start;
+    if (json_text.find_first_not_of(" \t\r\n") == std::string_view::npos)
+      throw IoError(source_name, "file holds no JSON (empty)");
+    throw IoError(source_name, fmt::format("column {}: not valid JSON: {}", column, why),
+                  FileLocation{line, std::nullopt});
   }
   const Reader r(source_name);
   r.object(root, "", {"dt_s", "steps", "output_every", "integrator", "implicit", "gravity_mm_s2",
@@ -503,11 +517,16 @@ Scene parse_scene(std::string_view json_text, const std::string& source_name,
 }
 
 Scene load_scene(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError(path.string(), "cannot open the scene file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return parse_scene(ss.str(), path.filename().string(), path.parent_path());
+  // The shared whole-file read: a folder, a device or an empty file is refused by name, and
+  // the size is checked against the memory budget.
+  std::string text;
+  try {
+    text = detail::read_file_bytes(path);
+  } catch (const IoError& e) {
+    if (std::filesystem::is_directory(path)) throw IoError(path.string(), "is a folder, not a scene file");
+    throw;
+  }
+  return parse_scene(text, path.string(), path.parent_path());
 }
 
 // ---- running -----------------------------------------------------------------------------

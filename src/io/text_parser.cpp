@@ -11,6 +11,7 @@
 
 #include <fmt/format.h>
 
+#include "ido/io/memory_budget.h"
 #include "parsers.h"
 
 namespace ido::io::detail {
@@ -128,12 +129,22 @@ std::string lower_extension(const std::string& filename) {
 std::string read_file_bytes(const std::filesystem::path& path) {
   namespace fs = std::filesystem;
   std::error_code ec;
-  if (!fs::exists(path, ec)) throw IoError(path.string(), "no such file");
-  if (fs::is_directory(path, ec)) throw IoError(path.string(), "is a folder, expected a file");
+  const auto status = fs::status(path, ec);
+  if (!fs::exists(status)) throw IoError(path.string(), "no such file");
+  if (fs::is_directory(status)) throw IoError(path.string(), "is a folder, expected a file");
+  // A device or pipe (/dev/zero named x.stl) has no size and may never end.
+  if (!fs::is_regular_file(status)) throw IoError(path.string(), "is not a regular file (a device, pipe or socket)");
+  const auto size = fs::file_size(path, ec);
+  if (ec) throw IoError(path.string(), "cannot read the file size: " + ec.message());
+  if (size == 0) throw IoError(path.string(), "file is empty");
+  check_memory_budget(path.string(), size, fmt::format("the file's {} bytes", size));
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError(path.string(), "cannot open for reading");
-  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // Exactly the size found above: a file that grows meanwhile is read as it was.
+  std::string bytes(static_cast<std::size_t>(size), '\0');
+  in.read(bytes.data(), static_cast<std::streamsize>(size));
   if (in.bad()) throw IoError(path.string(), "read failed");
+  bytes.resize(static_cast<std::size_t>(in.gcount()));
   if (bytes.empty()) throw IoError(path.string(), "file is empty");
   return bytes;
 }

@@ -4,13 +4,18 @@
 #include "ido/io/volume_io.h"
 
 #include <algorithm>
+#include <bit>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
 #include <system_error>
+
+#include <fmt/format.h>
 
 #include "ido/core/atomic_file.h"
 #include "ido/core/error.h"
 #include "itk_bridge.h"
+#include "nifti_header.h"
 
 namespace ido::io {
 namespace fs = std::filesystem;
@@ -34,6 +39,17 @@ VolumeKind kind_of(const fs::path& path) {
   return VolumeKind::Unknown;
 }
 
+[[noreturn]] void throw_non_finite(const std::string& path, std::uint64_t bad, std::uint64_t total, std::uint64_t first,
+                                   const Index3& size) {
+  const auto nx = static_cast<std::uint64_t>(std::max<std::int64_t>(size[0], 1));
+  const auto ny = static_cast<std::uint64_t>(std::max<std::int64_t>(size[1], 1));
+  throw IoError(path, fmt::format("{} of {} voxels are not finite (NaN or infinite), the first at voxel ({}, {}, {})", bad,
+                                  total, first % nx, first / nx % ny, first / (nx * ny)));
+}
+
+/// The checks every reader's volume goes through before a caller sees it (one place, so the
+/// formats agree): a positive finite spacing, a finite origin, a non-singular direction,
+/// finite voxels.
 image::Volume<float> to_volume(detail::RawVolume raw, const std::string& path) {
   Index3 size{raw.grid.size[0], raw.grid.size[1], raw.grid.size[2]};
   Vec3 spacing(raw.grid.spacing[0], raw.grid.spacing[1], raw.grid.spacing[2]);
@@ -41,8 +57,19 @@ image::Volume<float> to_volume(detail::RawVolume raw, const std::string& path) {
   Mat3 dir;
   for (int a = 0; a < 3; ++a)
     for (int b = 0; b < 3; ++b) dir(a, b) = raw.grid.direction[static_cast<std::size_t>(a * 3 + b)];
+  detail::check_volume_spacing(path, raw.grid.spacing);
+  if (!origin.allFinite()) throw IoError(path, "origin is not finite");
   if (!dir.allFinite() || std::abs(dir.determinant()) < 1e-6)
     throw IoError(path, "direction matrix is singular or not finite");
+  // Bit test (exponent all ones: NaN or ±inf), which vectorises; a NaN read as a number would
+  // pass every threshold downstream.
+  std::uint64_t bad = 0;
+  for (const float v : raw.voxels) bad += (std::bit_cast<std::uint32_t>(v) & 0x7f800000u) == 0x7f800000u;
+  if (bad > 0) {
+    std::uint64_t first = 0;
+    while (std::isfinite(raw.voxels[first])) ++first;
+    throw_non_finite(path, bad, raw.voxels.size(), first, size);
+  }
   try {
     // The constructor checks the voxel count against the size (InvalidInput, named below).
     return image::Volume<float>(size, std::move(raw.voxels), spacing, origin, dir);
@@ -50,6 +77,49 @@ image::Volume<float> to_volume(detail::RawVolume raw, const std::string& path) {
     throw IoError(path, e.what());
   }
 }
+
+/// A NIfTI file read through ITK, with the checks ITK's reader (niftilib) leaves out: it
+/// zero-fills missing voxel bytes, turns NaN and infinite floats into 0 and a spacing of 0,
+/// -1 or NaN into 1 (nifti_header.h).
+detail::RawVolume read_nifti(const std::string& path) {
+  const detail::NiftiHeader header = detail::read_nifti_header(path);
+  std::array<double, 3> spacing{1.0, 1.0, 1.0};
+  for (std::int64_t a = 1; a <= std::min<std::int64_t>(header.dim[0], 3); ++a)
+    spacing[static_cast<std::size_t>(a - 1)] = header.pixdim[static_cast<std::size_t>(a)];
+  detail::check_volume_spacing(path, spacing);
+  const bool gz = ends_with(path, ".gz");
+  const bool is_float = detail::nifti_is_float(header);
+  // Float data are streamed once before ITK reads them (their NaNs would come back as 0), an
+  // uncompressed file's length is known up front.
+  if (!gz || is_float) {
+    const auto scan = detail::check_nifti_voxels(path, header);
+    if (scan.non_finite > 0)
+      throw_non_finite(path, scan.non_finite, header.voxel_count, scan.first_non_finite,
+                       Index3{header.dim[1], header.dim[0] >= 2 ? header.dim[2] : 1, header.dim[0] >= 3 ? header.dim[3] : 1});
+  }
+  detail::RawVolume raw = detail::itk_read_file(path, VolumeKind::Nifti);
+  // An integer .nii.gz that ends early ends in voxels of stored value 0 (after ITK's
+  // rescaling: 0 or scl_inter). Only then is the stream decompressed a second time to count
+  // its bytes; a scan whose last voxel holds anything else was read whole and costs nothing
+  // more.
+  if (gz && !is_float && !raw.voxels.empty()) {
+    const float last = raw.voxels.back();
+    if (last == 0.0f || last == static_cast<float>(header.scl_inter)) (void)detail::check_nifti_voxels(path, header);
+  }
+  return raw;
+}
+
+}  // namespace
+
+namespace detail {
+void check_volume_spacing(const std::string& path, const std::array<double, 3>& s) {
+  for (const double v : s)
+    if (!(v > 0.0) || !std::isfinite(v))
+      throw IoError(path, fmt::format("spacing {} × {} × {} mm is not positive and finite", s[0], s[1], s[2]));
+}
+}  // namespace detail
+
+namespace {
 
 template <class T>
 void write_any(const fs::path& path, const image::Volume<T>& volume, detail::PixelKind pixel) {
@@ -81,16 +151,20 @@ void write_any(const fs::path& path, const image::Volume<T>& volume, detail::Pix
 
 image::Volume<float> read_volume(const fs::path& path, VolumeFileInfo* info) {
   std::error_code ec;
-  if (!fs::exists(path, ec)) throw IoError(path.string(), "no such file or folder");
+  const auto status = fs::status(path, ec);
+  if (!fs::exists(status)) throw IoError(path.string(), "no such file or folder");
   detail::RawVolume raw;
-  if (fs::is_directory(path, ec)) {
+  if (fs::is_directory(status)) {
     raw = detail::itk_read_dicom_folder(path.string());
   } else {
     const VolumeKind kind = kind_of(path);
     if (kind == VolumeKind::Unknown)
       throw IoError(path.string(), "unknown volume extension (expected .nii, .nii.gz, .nrrd, "
                                    ".nhdr, .mha, .mhd or a DICOM folder)");
-    raw = detail::itk_read_file(path.string(), kind);
+    // A device or pipe (/dev/zero named x.nii) never ends: only regular files are read.
+    if (!fs::is_regular_file(status))
+      throw IoError(path.string(), "is not a regular file (a device, pipe or socket)");
+    raw = kind == VolumeKind::Nifti ? read_nifti(path.string()) : detail::itk_read_file(path.string(), kind);
   }
   if (info) *info = {raw.format, raw.pixel_type, raw.components, raw.series_uid};
   return to_volume(std::move(raw), path.string());

@@ -34,6 +34,9 @@ TEST(CliInfo, BadInputCatalogueExitsTwoWithOneLine) {
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
     EXPECT_NE(r.err.find((dir / bad.file).string()), std::string::npos) << r.err;
     EXPECT_NE(r.err.find(bad.fragment), std::string::npos) << r.err;
+    // In ido's words: no ITK object pointers, teem chains or library prefixes.
+    for (const char* internal : {"0x", "ITK ERROR", "[nrrd]", "nifti_", "json.exception", "internal error"})
+      EXPECT_EQ(r.err.find(internal), std::string::npos) << internal << " in: " << r.err;
     EXPECT_TRUE(r.out.empty()) << r.out;
   }
 }
@@ -166,6 +169,62 @@ TEST(CliData, AbdomenSeriesInfoAndConversion) {
   const auto ct = io::read_volume(dir / "ct.nii.gz", &info);
   EXPECT_EQ(info.pixel_type, "short");  // HU stay integers: int16, not float
   EXPECT_TRUE(ct.same_grid(io::read_volume(series), 1e-4));
+}
+
+}  // namespace
+}  // namespace ido::cli
+
+namespace ido::cli {
+namespace {
+
+// `ido info` lists in reading order — what the file is, its size and geometry, then the
+// statistics (p5 before p25) — in text and JSON alike.
+TEST(CliInfo, ListsInReadingOrder) {
+  const auto dir = test::scratch_dir("cli-info-order");
+  image::Volume<std::int16_t> v(Index3{10, 10, 2}, Vec3(0.5, 0.5, 3.0), Vec3(1, 2, 3));
+  for (std::size_t n = 0; n < v.data().size(); ++n) v.data()[n] = static_cast<std::int16_t>(n);
+  io::write_volume(dir / "v.nii.gz", v);
+  const std::vector<std::string> order = {"file", "kind", "format", "size", "spacing_mm", "origin_mm", "voxels",
+                                          "min", "max", "mean", "percentiles", "p1", "p5", "p25", "p50", "p99"};
+  const auto text = test::run_tool("info " + q(dir / "v.nii.gz"));
+  ASSERT_EQ(text.exit_code, 0) << text.err;
+  const auto json_out = test::run_tool("info --json " + q(dir / "v.nii.gz"));
+  ASSERT_EQ(json_out.exit_code, 0) << json_out.err;
+  for (const auto* out : {&text.out, &json_out.out}) {
+    std::size_t last = 0;
+    for (const auto& key : order) {
+      // Text lines start with "key:" (indented under percentiles), JSON with "\"key\":".
+      const std::string needle = out == &text.out ? key + ":" : "\"" + key + "\":";
+      const auto at = out->find(needle, last);
+      ASSERT_NE(at, std::string::npos) << key << " missing or out of order in:\n" << *out;
+      last = at;
+    }
+  }
+}
+
+// A tetrahedral mesh with an inverted (or flat) tetrahedron is read, and the check reports
+// it: simulation frames can hold such elements and must read back.
+TEST(CliInfo, InvertedAndDegenerateTetrahedraAreReadAndCounted) {
+  const auto bad = test::fixtures_dir() / "bad";
+  for (const auto& [file, key] : {std::pair{"inverted.vtu", "inverted"}, std::pair{"inverted.ele", "inverted"},
+                                  std::pair{"degenerate.vtu", "degenerate"}}) {
+    SCOPED_TRACE(file);
+    const auto r = test::run_tool("info --json " + q(bad / file));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const auto j = json::parse(r.out);
+    EXPECT_EQ(j["checks"][key], 1) << r.out;
+  }
+  // A frame with an inverted tetrahedron converts and reads back unchanged.
+  const auto dir = test::scratch_dir("cli-info-inverted");
+  geometry::TetMesh m = unit_tet();
+  std::swap(m.tets[0][1], m.tets[0][2]);
+  io::write_tet_mesh(dir / "frame.vtu", m);
+  ASSERT_EQ(test::run_tool("convert " + q(dir / "frame.vtu") + " " + q(dir / "frame.msh")).exit_code, 0);
+  const auto back = io::read_tet_mesh(dir / "frame.msh");
+  EXPECT_EQ(back.tets, m.tets);
+  const auto r = test::run_tool("info --json " + q(dir / "frame.msh"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(json::parse(r.out)["checks"]["inverted"], 1) << r.out;
 }
 
 }  // namespace

@@ -48,7 +48,7 @@ image::Volume<float> sphere_volume(F value) {
 // a closed 2-manifold boundary of genus 0, and a report matching the mesh.
 void expect_good_sphere_mesh(const fs::path& mesh_path, const fs::path& report_path,
                              double volume_tolerance) {
-  const auto mesh = io::read_tet_mesh(mesh_path);  // rejects inverted tetrahedra itself
+  const auto mesh = io::read_tet_mesh(mesh_path);  // reads inverted tetrahedra too: counted below
   const auto q = geometry::check_tet_mesh(mesh);
   EXPECT_EQ(q.inverted, 0u);
   EXPECT_EQ(q.degenerate, 0u);

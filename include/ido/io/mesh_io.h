@@ -30,8 +30,10 @@ void write_triangle_mesh(const std::filesystem::path& path, const geometry::Tria
                          const MeshWriteOptions& options = {});
 
 /// Reads a tetrahedral mesh: .vtu (with point and cell data), .msh (Gmsh 2.2 or 4.1,
-/// ASCII), .node/.ele (TetGen; either name may be given). Degenerate or inverted
-/// tetrahedra are rejected with ido::InvalidInput naming the element.
+/// ASCII), .node/.ele (TetGen; either name may be given). Inverted or degenerate tetrahedra
+/// are read as they are (a simulation frame may hold them; geometry::check_tet_mesh counts
+/// them); non-finite coordinates and indices out of range are rejected with
+/// ido::InvalidInput naming the element.
 [[nodiscard]] geometry::TetMesh read_tet_mesh(const std::filesystem::path& path);
 
 /// Writes a tetrahedral mesh (.vtu, .msh, .node/.ele), atomically.

@@ -95,3 +95,45 @@ w("bad_sizes.nrrd", "NRRD0004\ntype: float\ndimension: 3\nsizes: 2 2\nencoding: 
 w("truncated.mha", "ObjectType = Image\nNDims = 3\nDimSize = 4 4 4\nElementType = MET_FLOAT\nElementDataFile = LOCAL\n" + "\0" * 8)
 os.makedirs("folder.vtu", exist_ok=True)
 w("folder.vtu/.keep", "")
+
+# Volumes whose header promises what the file does not hold (issue 30): each must be refused,
+# not read as zeros, NaN or a made-up spacing.
+import gzip
+import math
+
+def nifti1(dims=(4, 4, 4), datatype=4, bitpix=16, pixdim=(1, 1, 1), vox_offset=352.0):
+    h = bytearray(352)
+    struct.pack_into("<i", h, 0, 348)
+    struct.pack_into("<8h", h, 40, len(dims), *dims, *([1] * (7 - len(dims))))
+    struct.pack_into("<hh", h, 70, datatype, bitpix)
+    struct.pack_into("<8f", h, 76, 1, *pixdim, 1, 1, 1, 1)
+    struct.pack_into("<f", h, 108, vox_offset)
+    h[344:348] = b"n+1\0"
+    return bytes(h)
+
+VOX = bytes(range(128))  # 4x4x4 int16
+w("pixdim_zero.nii", nifti1(pixdim=(1, 0, 1)) + VOX)
+w("pixdim_negative.nii", nifti1(pixdim=(-1, 1, 1)) + VOX)
+w("pixdim_nan.nii", nifti1(pixdim=(1, 1, math.nan)) + VOX)
+w("vox_offset_past_end.nii", nifti1(vox_offset=1048576.0) + VOX)
+w("all_nan.nii", nifti1(dims=(2, 2, 2), datatype=16, bitpix=32) + struct.pack("<8f", *([math.nan] * 8)))
+w("huge.nii", nifti1(dims=(32767, 32767, 32767)) + VOX)
+w("bad_dim.nii", nifti1(dims=(4, 0, 4)) + VOX)
+# NIfTI-2: a 540-byte header (sizeof_hdr 540, magic "n+2").
+h2 = bytearray(544)
+struct.pack_into("<i", h2, 0, 540)
+h2[4:12] = b"n+2\0\r\n\x1a\n"
+struct.pack_into("<hh", h2, 12, 4, 16)
+struct.pack_into("<8q", h2, 16, 3, 2, 2, 2, 1, 1, 1, 1)
+struct.pack_into("<8d", h2, 104, 1, 1, 1, 1, 1, 1, 1, 1)
+struct.pack_into("<q", h2, 168, 544)
+w("nifti2.nii", bytes(h2) + b"\0" * 16)
+# gzip: a stream cut short, and an intact stream holding fewer voxel bytes than declared.
+full = gzip.compress(nifti1() + VOX, mtime=0)
+w("cut_stream.nii.gz", full[: len(full) // 2])
+w("short_stream.nii.gz", gzip.compress(nifti1() + VOX[:60], mtime=0))
+w("cut_header.nii.gz", gzip.compress(nifti1() + VOX, mtime=0)[:40])
+MHA = "ObjectType = Image\nNDims = 3\nDimSize = 2 2 2\nElementSpacing = {sp}\nElementType = {et}\nElementDataFile = LOCAL\n"
+w("unknown_element_type.mha", MHA.format(sp="1 1 1", et="MET_FOO").encode() + b"\0" * 8)
+w("spacing_zero.mha", MHA.format(sp="1 0 1", et="MET_UCHAR").encode() + b"\0" * 8)
+w("infinite.mha", MHA.format(sp="1 1 1", et="MET_FLOAT").encode() + struct.pack("<8f", 0, 0, 0, math.inf, 0, 0, 0, 0))

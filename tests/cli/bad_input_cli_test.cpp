@@ -1,0 +1,259 @@
+// SPDX-License-Identifier: Apache-2.0
+// Inputs that once got through (issue 30) — volumes that hold fewer bytes than their header
+// promises, non-finite voxels, spacings of 0/-1/NaN, devices named like mesh files, scene
+// files that are not JSON — run through the built tool: exit 2, one stderr line naming the
+// file, nothing written, and a small peak memory (measured per run with wait4). A hang fails
+// through `timeout` (exit 124) and the test's ctest TIMEOUT; no wall-clock time is asserted.
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <zlib.h>
+
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <random>
+#include <set>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "ido/io/volume_io.h"
+#include "support/test_support.h"
+
+namespace ido::cli {
+namespace {
+namespace fs = std::filesystem;
+
+struct Measured {
+  int exit_code = -1;
+  std::string out, err;
+  long max_rss_kib = 0;  ///< peak resident memory of the tool (and `timeout`)
+};
+
+constexpr long kMemoryCeilingKib = 100 * 1024;  // 100 MiB
+
+/// Runs `ido ARGS` under `timeout 60` and measures its peak memory through wait4. Its
+/// stdout/stderr go to a folder of their own so that @p args' folders stay as they were.
+Measured run_measured(const std::string& args) {
+  static int counter = 0;
+  const fs::path logs = test::scratch_dir("bad-input-cli-logs-" + std::to_string(counter++));
+  const std::string cmd = "exec timeout 60 " + test::tool_path().string() + " " + args + " >" +
+                          (logs / "out").string() + " 2>" + (logs / "err").string() + " </dev/null";
+  const pid_t pid = fork();
+  if (pid == 0) {
+    execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  Measured m;
+  int status = 0;
+  rusage usage{};
+  if (pid > 0 && wait4(pid, &status, 0, &usage) == pid) {
+    m.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    m.max_rss_kib = usage.ru_maxrss;
+  }
+  auto slurp = [](const fs::path& p) {
+    std::ifstream in(p);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+  };
+  m.out = slurp(logs / "out");
+  m.err = slurp(logs / "err");
+  return m;
+}
+
+std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
+
+std::set<std::string> names_in(const fs::path& dir) {
+  std::set<std::string> names;
+  for (const auto& e : fs::directory_iterator(dir)) names.insert(e.path().filename().string());
+  return names;
+}
+
+/// The shape every refusal here must have: exit 2, one line naming @p file and holding
+/// @p fragment, no library internals, nothing on stdout, under the memory ceiling.
+void expect_refused(const Measured& r, const fs::path& file, const std::string& fragment) {
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_NE(r.err.find(file.string()), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(fragment), std::string::npos) << "expected '" << fragment << "' in: " << r.err;
+  for (const char* internal : {"0x", "json.exception", "nifti_", "[nrrd]", "ITK ERROR", "internal error"})
+    EXPECT_EQ(r.err.find(internal), std::string::npos) << internal << " in: " << r.err;
+  EXPECT_TRUE(r.out.empty()) << r.out;
+  EXPECT_LT(r.max_rss_kib, kMemoryCeilingKib);
+}
+
+std::string read_bytes(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+void write_bytes(const fs::path& p, std::string_view bytes) {
+  std::ofstream(p, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+void write_gzip(const fs::path& p, std::string_view bytes) {
+  gzFile f = gzopen(p.c_str(), "wb");
+  ASSERT_NE(f, nullptr);
+  ASSERT_EQ(gzwrite(f, bytes.data(), static_cast<unsigned>(bytes.size())), static_cast<int>(bytes.size()));
+  gzclose(f);
+}
+
+/// An uncompressed NIfTI-1 scan of int16 noise (so that it does not compress to nothing):
+/// 48 × 40 × 24 voxels, 352 header bytes then 92 160 voxel bytes.
+std::string noisy_scan_nii(const fs::path& dir) {
+  image::Volume<std::int16_t> v(Index3{48, 40, 24}, Vec3(0.7, 0.7, 2.5), Vec3(0, 0, 0));
+  std::mt19937 rng(30);
+  std::uniform_int_distribution<int> hu(-1000, 1500);
+  for (auto& x : v.data()) x = static_cast<std::int16_t>(hu(rng));
+  v.data().back() = 7;  // a last voxel that is not 0
+  io::write_volume(dir / "scan.nii", v);
+  auto bytes = read_bytes(dir / "scan.nii");
+  fs::remove(dir / "scan.nii");
+  return bytes;
+}
+
+void set_float(std::string& header, std::size_t offset, float value) {
+  std::memcpy(header.data() + offset, &value, sizeof value);
+}
+
+// The first 200 bytes of a real .nii.gz, and its first half: the gzip stream ends early.
+// `ido info` and `ido convert` refuse it and convert writes nothing.
+TEST(CliBadVolume, GzipStreamCutShortIsRefused) {
+  const auto dir = test::scratch_dir("bad-cli-cut-gzip");
+  const std::string nii = noisy_scan_nii(dir);
+  write_gzip(dir / "scan.nii.gz", nii);
+  const std::string gz = read_bytes(dir / "scan.nii.gz");
+  ASSERT_GT(gz.size(), 2000u);
+  write_bytes(dir / "first200.nii.gz", gz.substr(0, 200));
+  write_bytes(dir / "half.nii.gz", gz.substr(0, gz.size() / 2));
+  // The whole file reads (the checks refuse only what is wrong).
+  ASSERT_EQ(run_measured("info " + q(dir / "scan.nii.gz")).exit_code, 0);
+  const auto before = names_in(dir);
+  expect_refused(run_measured("info " + q(dir / "first200.nii.gz")), dir / "first200.nii.gz", "cut short");
+  expect_refused(run_measured("info " + q(dir / "half.nii.gz")), dir / "half.nii.gz", "gzip stream is cut short");
+  expect_refused(run_measured("convert " + q(dir / "half.nii.gz") + " " + q(dir / "out.nii")), dir / "half.nii.gz",
+                 "gzip stream is cut short");
+  EXPECT_EQ(names_in(dir), before);
+}
+
+// An intact gzip stream (and a plain .nii) that hold fewer voxel bytes than the header says,
+// and a vox_offset past the end of the data.
+TEST(CliBadVolume, FewerVoxelBytesThanDeclaredIsRefused) {
+  const auto dir = test::scratch_dir("bad-cli-short-voxels");
+  const std::string nii = noisy_scan_nii(dir);
+  write_gzip(dir / "short.nii.gz", nii.substr(0, nii.size() - 1000));
+  write_bytes(dir / "short.nii", nii.substr(0, nii.size() - 1000));
+  std::string far = nii;
+  set_float(far, 108, 1.0e6f);  // vox_offset
+  write_gzip(dir / "offset.nii.gz", far);
+  write_bytes(dir / "offset.nii", far);
+  const auto before = names_in(dir);
+  const std::string declared = "too few for the 92160 bytes of voxels";
+  expect_refused(run_measured("info " + q(dir / "short.nii.gz")), dir / "short.nii.gz", declared);
+  expect_refused(run_measured("info " + q(dir / "short.nii")), dir / "short.nii", declared);
+  expect_refused(run_measured("info " + q(dir / "offset.nii.gz")), dir / "offset.nii.gz", "from byte 1000000");
+  expect_refused(run_measured("convert " + q(dir / "offset.nii") + " " + q(dir / "o.mha")), dir / "offset.nii",
+                 "from byte 1000000");
+  EXPECT_EQ(names_in(dir), before);
+}
+
+// Non-finite voxels are refused in every format (one check for all readers).
+TEST(CliBadVolume, NonFiniteVoxelsAreRefused) {
+  const auto dir = test::scratch_dir("bad-cli-nan");
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  image::Volume<float> all_nan(Index3{6, 5, 4}, Vec3(1, 1, 1), Vec3(0, 0, 0), Mat3::Identity(), nan);
+  io::write_volume(dir / "nan.nii.gz", all_nan);
+  image::Volume<float> one_inf(Index3{6, 5, 4}, Vec3(1, 1, 1), Vec3(0, 0, 0), Mat3::Identity(), 1.0f);
+  one_inf(2, 3, 1) = std::numeric_limits<float>::infinity();
+  io::write_volume(dir / "inf.nrrd", one_inf);
+  const auto before = names_in(dir);
+  expect_refused(run_measured("info " + q(dir / "nan.nii.gz")), dir / "nan.nii.gz", "120 of 120 voxels are not finite");
+  expect_refused(run_measured("convert " + q(dir / "inf.nrrd") + " " + q(dir / "o.nii")), dir / "inf.nrrd",
+                 "1 of 120 voxels are not finite (NaN or infinite), the first at voxel (2, 3, 1)");
+  EXPECT_EQ(names_in(dir), before);
+}
+
+// pixdim 0, -1 and NaN: refused with the message a MetaImage with spacing 0 gets.
+TEST(CliBadVolume, NonPositiveOrNanSpacingIsRefusedAlikeInNiftiAndMetaImage) {
+  const auto dir = test::scratch_dir("bad-cli-pixdim");
+  const std::string nii = noisy_scan_nii(dir);
+  for (const float p : {0.0f, -1.0f, std::numeric_limits<float>::quiet_NaN()}) {
+    std::string bad = nii;
+    set_float(bad, 80, p);  // pixdim[1]
+    const fs::path file = dir / "pixdim.nii.gz";
+    write_gzip(file, bad);
+    expect_refused(run_measured("info " + q(file)), file, "mm is not positive and finite");
+    fs::remove(file);
+  }
+  const fs::path mha = dir / "spacing0.mha";
+  write_bytes(mha, "ObjectType = Image\nNDims = 3\nDimSize = 2 2 2\nElementSpacing = 0 1 1\n"
+                   "ElementType = MET_UCHAR\nElementDataFile = LOCAL\n" + std::string(8, '\1'));
+  expect_refused(run_measured("info " + q(mha)), mha, "spacing 0 × 1 × 1 mm is not positive and finite");
+}
+
+// Devices and pipes named like mesh or volume files: refused at once, nothing read.
+TEST(CliBadInput, DevicesAndPipesAreRefusedWithoutReading) {
+  const auto dir = test::scratch_dir("bad-cli-devices");
+  fs::create_symlink("/dev/zero", dir / "x.stl");
+  fs::create_symlink("/dev/urandom", dir / "x.ply");
+  fs::create_symlink("/dev/zero", dir / "x.nii.gz");
+  fs::create_symlink("/dev/zero", dir / "x.vtu");
+  ASSERT_EQ(mkfifo((dir / "x.obj").c_str(), 0600), 0);
+  for (const char* name : {"x.stl", "x.ply", "x.nii.gz", "x.vtu", "x.obj"}) {
+    SCOPED_TRACE(name);
+    expect_refused(run_measured("info " + q(dir / name)), dir / name, "is not a regular file");
+  }
+  expect_refused(run_measured("convert " + q(dir / "x.stl") + " " + q(dir / "y.ply")), dir / "x.stl",
+                 "is not a regular file");
+  EXPECT_FALSE(fs::exists(dir / "y.ply"));
+}
+
+// A header that declares more voxels than memory holds is refused before anything is
+// allocated, with the need and the limit.
+TEST(CliBadVolume, DeclaredSizeOverTheMemoryLimitIsRefusedBeforeAllocating) {
+  const auto dir = test::scratch_dir("bad-cli-huge");
+  std::string nii = noisy_scan_nii(dir);
+  const std::int16_t huge = 32767;
+  for (std::size_t axis = 0; axis < 3; ++axis) std::memcpy(nii.data() + 42 + 2 * axis, &huge, 2);
+  write_gzip(dir / "huge.nii.gz", nii);
+  const auto r = run_measured("info " + q(dir / "huge.nii.gz"));
+  expect_refused(r, dir / "huge.nii.gz", "32767×32767×32767 voxels need 128 TiB, over the memory limit of");
+}
+
+// Scene files: a JSON syntax error gives the line and column in ido's words; a folder is
+// named as such; no output folder is made.
+TEST(CliBadInput, SceneErrorsAreOneLineAndMakeNoOutput) {
+  const auto dir = test::scratch_dir("bad-cli-scene");
+  write_bytes(dir / "scene.json", "{\n  \"dt_s\": 0.001,\n    }\n");
+  const auto r = run_measured("simulate " + q(dir / "scene.json") + " -o " + q(dir / "out"));
+  expect_refused(r, "scene.json:3: column 5:", "syntax error while parsing object key");
+  fs::create_directory(dir / "folder.json");
+  const auto f = run_measured("simulate " + q(dir / "folder.json") + " -o " + q(dir / "out"));
+  expect_refused(f, dir / "folder.json", "is a folder, not a scene file");
+  EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
+}  // namespace
+}  // namespace ido::cli
+
+namespace ido::cli {
+namespace {
+
+// --memory-limit sets the budget every declared size is checked against; a bad value is
+// refused naming the option.
+TEST(CliBadInput, MemoryLimitOptionBoundsWhatAFileMayDeclare) {
+  const auto dir = test::scratch_dir("bad-cli-memory-limit");
+  image::Volume<float> v(Index3{16, 16, 16}, Vec3(1, 1, 1), Vec3(0, 0, 0), Mat3::Identity(), 1.0f);
+  io::write_volume(dir / "v.nii.gz", v);  // 16 KiB of float voxels
+  EXPECT_EQ(run_measured("--memory-limit 1M info " + q(dir / "v.nii.gz")).exit_code, 0);
+  expect_refused(run_measured("--memory-limit 8K info " + q(dir / "v.nii.gz")), dir / "v.nii.gz",
+                 "16×16×16 voxels need 16 KiB, over the memory limit of 8 KiB");
+  const auto bad = run_measured("--memory-limit lots info " + q(dir / "v.nii.gz"));
+  EXPECT_EQ(bad.exit_code, 2) << bad.err;
+  EXPECT_NE(bad.err.find("--memory-limit: 'lots' is not a memory size"), std::string::npos) << bad.err;
+}
+
+}  // namespace
+}  // namespace ido::cli
