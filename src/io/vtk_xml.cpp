@@ -4,6 +4,7 @@
 // appended raw or base64 data, UInt32 or UInt64 block headers, uncompressed or compressed by
 // vtkZLibDataCompressor (ParaView's default when saving). Written: inline base64 binary with
 // UInt64 headers (exact), or ascii with 17 significant digits.
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -243,6 +244,11 @@ std::vector<double> read_array(const VtkDocument& doc, const XmlNode& a, std::si
     if (total != static_cast<double>(need) || (n > 0 && !(block > 0)))
       doc.fail(a, fmt::format("DataArray '{}' declares {} uncompressed bytes, expected {} ({} values of {} bytes)",
                               array_name, total, need, expected, ti.size));
+    // zlib inflates at most 1032:1: a declared size beyond that is impossible for the blocks
+    // at hand, and is refused before the payload is allocated.
+    if (static_cast<double>(need) > 1032.0 * static_cast<double>(blocks.size()) + 1024.0)
+      doc.fail(a, fmt::format("DataArray '{}' declares {} uncompressed bytes, more than its {} compressed bytes can hold",
+                              array_name, need, blocks.size()));
     std::string payload(need, '\0');
     std::size_t in_pos = 0, out_pos = 0;
     for (std::size_t b = 0; b < n; ++b) {
@@ -301,7 +307,9 @@ std::vector<double> read_array(const VtkDocument& doc, const XmlNode& a, std::si
   if (format == "ascii") {
     TextCursor tc(doc.bytes.substr(a.text_begin, a.text_end - a.text_begin), doc.name);
     const std::int64_t base_line = line_at(doc.bytes, a.text_begin) - 1;
-    out.reserve(expected);
+    // Each value takes at least two characters (a digit and a separator): reserve no more
+    // than the text can hold, whatever the header declares.
+    out.reserve(std::min(expected, (a.text_end - a.text_begin) / 2 + 1));
     while (!tc.at_end()) {
       const auto t = tc.next();
       double v;

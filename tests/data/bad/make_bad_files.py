@@ -137,3 +137,24 @@ MHA = "ObjectType = Image\nNDims = 3\nDimSize = 2 2 2\nElementSpacing = {sp}\nEl
 w("unknown_element_type.mha", MHA.format(sp="1 1 1", et="MET_FOO").encode() + b"\0" * 8)
 w("spacing_zero.mha", MHA.format(sp="1 0 1", et="MET_UCHAR").encode() + b"\0" * 8)
 w("infinite.mha", MHA.format(sp="1 1 1", et="MET_FLOAT").encode() + struct.pack("<8f", 0, 0, 0, math.inf, 0, 0, 0, 0))
+# A zlib-compressed .vtu whose block header declares far more bytes than its compressed
+# block can inflate to (deflate's limit is 1032:1): refused before the payload is allocated.
+import zlib
+block = zlib.compress(b"\0" * 16)
+appended = struct.pack("<4I", 1, 48000, 48000, len(block)) + block
+w("zlib_bomb.vtu", ("""<?xml version="1.0"?>
+<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian" compressor="vtkZLibDataCompressor">
+  <UnstructuredGrid>
+    <Piece NumberOfPoints="2000" NumberOfCells="1">
+      <Points>
+        <DataArray type="Float64" NumberOfComponents="3" format="appended" offset="0"/>
+      </Points>
+      <Cells>
+        <DataArray type="Int64" Name="connectivity" format="ascii">0 1 2 3</DataArray>
+        <DataArray type="Int64" Name="offsets" format="ascii">4</DataArray>
+        <DataArray type="UInt8" Name="types" format="ascii">10</DataArray>
+      </Cells>
+    </Piece>
+  </UnstructuredGrid>
+  <AppendedData encoding="raw">
+   _""").encode() + appended + b"\n  </AppendedData>\n</VTKFile>\n")
