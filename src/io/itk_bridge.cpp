@@ -26,6 +26,7 @@
 #include "ido/core/memory.h"
 #include "ido/core/parallel.h"
 #include "ido/io/memory_budget.h"
+#include "nifti_header.h"
 
 namespace ido::io::detail {
 namespace {
@@ -193,15 +194,19 @@ RawVolume read_file(const std::string& path, VolumeKind kind) {
   check_grid_budget(path, n[0], n[1], n[2]);
   // ITK reads a too-short uncompressed MetaImage without complaint: check its size first
   // (NIfTI files are checked by volume_io.cpp through nifti_header.h).
-  bool uncompressed = false;
+  // A compressed one whose stream does not inflate is read as whatever MetaIO's buffer held
+  // (it only prints "Uncompress failed"): inflate it first (nifti_header.h).
+  bool uncompressed = false, compressed_here = false;
   if (kind == VolumeKind::Meta) {
     auto* meta = dynamic_cast<itk::MetaImageIO*>(io.GetPointer());
-    uncompressed = meta && !meta->GetMetaImagePointer()->CompressedData() &&
-                   std::string(meta->GetMetaImagePointer()->ElementDataFileName()) == "LOCAL";
+    const bool local = meta && std::string(meta->GetMetaImagePointer()->ElementDataFileName()) == "LOCAL";
+    uncompressed = local && !meta->GetMetaImagePointer()->CompressedData();
+    compressed_here = local && meta->GetMetaImagePointer()->CompressedData();
   }
   std::error_code ec;
   const auto file_size = std::filesystem::file_size(path, ec);
   const auto voxel_bytes = static_cast<std::uintmax_t>(io->GetImageSizeInBytes());
+  if (compressed_here) check_meta_zlib_voxels(path, voxel_bytes);
   if (uncompressed && !ec && file_size < voxel_bytes)
     throw IoError(path, fmt::format("file has {} bytes, too few for the {} bytes of voxels its header declares (truncated?)",
                                     file_size, voxel_bytes));

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <vector>
 
@@ -181,6 +182,45 @@ NiftiVoxelScan check_nifti_voxels(const std::string& path, const NiftiHeader& he
     }
   }
   return scan;
+}
+
+void check_meta_zlib_voxels(const std::string& path, std::uint64_t voxel_bytes) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError(path, "cannot open for reading");
+  // The header is text lines; the voxels start after the line naming their file.
+  std::string head(std::size_t(1) << 16, '\0');
+  in.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<std::size_t>(in.gcount()));
+  const auto key = head.find("ElementDataFile");
+  const auto eol = key == std::string::npos ? std::string::npos : head.find('\n', key);
+  if (eol == std::string::npos) throw IoError(path, "no ElementDataFile line in the first 64 KiB of the header");
+  in.clear();
+  in.seekg(static_cast<std::streamoff>(eol + 1));
+  z_stream z{};
+  if (inflateInit(&z) != Z_OK) throw IoError(path, "zlib could not start");
+  std::vector<unsigned char> input(std::size_t(1) << 16), output(std::size_t(1) << 18);
+  std::uint64_t produced = 0;
+  int rc = Z_OK;
+  while (produced < voxel_bytes && rc != Z_STREAM_END) {
+    if (z.avail_in == 0) {
+      in.read(reinterpret_cast<char*>(input.data()), static_cast<std::streamsize>(input.size()));
+      z.next_in = input.data();
+      z.avail_in = static_cast<uInt>(in.gcount());
+      if (z.avail_in == 0) break;  // the file ends
+    }
+    z.next_out = output.data();
+    z.avail_out = static_cast<uInt>(std::min<std::uint64_t>(output.size(), voxel_bytes - produced));
+    rc = inflate(&z, Z_NO_FLUSH);
+    produced += static_cast<std::uint64_t>(z.next_out - output.data());
+    if (rc != Z_OK && rc != Z_STREAM_END) break;
+  }
+  const std::string why = z.msg ? z.msg : (rc == Z_DATA_ERROR ? "invalid data" : "");
+  inflateEnd(&z);
+  if (produced < voxel_bytes)
+    throw IoError(path, fmt::format("compressed voxel data {} after {} of the {} bytes its header declares "
+                                    "(truncated?)",
+                                    why.empty() ? std::string("ends") : "is damaged (" + why + ")", produced,
+                                    voxel_bytes));
 }
 
 }  // namespace ido::io::detail

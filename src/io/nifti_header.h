@@ -57,4 +57,11 @@ struct NiftiVoxelScan {
 /// @throws ido::IoError naming @p path, the bytes found and the bytes declared.
 NiftiVoxelScan check_nifti_voxels(const std::string& path, const NiftiHeader& header);
 
+/// Checks a MetaImage whose voxels are zlib-compressed inside the file (CompressedData =
+/// True, ElementDataFile = LOCAL): MetaIO reports a stream that does not inflate only on
+/// stderr ("Uncompress failed") and hands back whatever its buffer held. The stream, which
+/// starts after the ElementDataFile line, is inflated a few hundred KiB at a time up to
+/// @p voxel_bytes. @throws ido::IoError naming @p path when it is damaged or holds fewer.
+void check_meta_zlib_voxels(const std::string& path, std::uint64_t voxel_bytes);
+
 }  // namespace ido::io::detail

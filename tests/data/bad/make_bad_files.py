@@ -158,3 +158,8 @@ w("zlib_bomb.vtu", ("""<?xml version="1.0"?>
   </UnstructuredGrid>
   <AppendedData encoding="raw">
    _""").encode() + appended + b"\n  </AppendedData>\n</VTKFile>\n")
+# Compressed MetaImage voxels that do not inflate, or inflate to fewer bytes than declared
+# (MetaIO only prints "Uncompress failed" and hands back its buffer).
+ZMHA = "ObjectType = Image\nNDims = 3\nDimSize = 4 4 4\nElementType = MET_SHORT\nCompressedData = True\nElementDataFile = LOCAL\n"
+w("damaged_zlib.mha", ZMHA.encode() + b"this is not a zlib stream")
+w("short_zlib.mha", ZMHA.encode() + zlib.compress(bytes(range(100))))
