@@ -145,23 +145,36 @@ void run(const DrillOptions& o, const GlobalOptions& g) {
   std::optional<SnapshotWriter> writer;
   if (!o.snapshots.empty()) writer.emplace(o.snapshots, picture);
 
-  drill::Simulator sim(hierarchy, device, so);
-  // The render consumer hands over copies of its v_lists at the picture times; they are
-  // rendered once the session is over, so rendering never competes with the session.
+  // The session, and what is kept of it: the surface, the report's figures and the summary's.
+  // The simulator (its v_lists and the render copy) is gone before the outputs are made.
   std::vector<std::pair<double, std::vector<std::vector<drill::SurfaceFace>>>> shots;
-  if (!o.snapshots.empty()) {
-    sim.set_surface_snapshots([&shots](double t, const auto& lists) { shots.emplace_back(t, lists); }, o.snapshot_every_s,
-                              device.duration());
-  }
+  std::vector<std::vector<drill::SurfaceFace>> lists;
+  geometry::TriangleMesh surface;
+  nlohmann::json r;
+  drill::SessionMemory mem;
+  drill::SessionStats st;
   {
-    const auto progress = make_progress(g.quiet);
-    // A safety net only: the session ends at the path's end plus at most the drain limit.
-    sim.run(device.duration() + so.drain_limit_s + 30.0, progress.get());
+    drill::Simulator sim(hierarchy, device, so);
+    // The render consumer hands over copies of its v_lists at the picture times; they are
+    // rendered once the session is over, so rendering never competes with the session.
+    if (!o.snapshots.empty()) {
+      sim.set_surface_snapshots([&shots](double t, const auto& lists) { shots.emplace_back(t, lists); },
+                                o.snapshot_every_s, device.duration());
+    }
+    {
+      const auto progress = make_progress(g.quiet);
+      // A safety net only: the session ends at the path's end plus at most the drain limit.
+      sim.run(device.duration() + so.drain_limit_s + 30.0, progress.get());
+    }
+    mem = sim.memory_use();
+    if (!o.report.empty()) r = drill_session_json(hierarchy, sim, so, before);
+    st = sim.stats();
+    lists = sim.take_render_v_lists();
   }
-  const auto& st = sim.stats();
-
+  surface = drill::assemble_surface(lists, hierarchy.vertices());
+  lists = {};
+  const std::size_t session_peak = peak_rss_bytes();  // before the outputs are made
   io::write_tet_mesh(output_tmp, drill::full_leaf_mesh(hierarchy));
-  const auto surface = drill::assemble_surface(sim.render_v_lists(), hierarchy.vertices());
   if (!o.surface.empty()) io::write_triangle_mesh(surface_tmp, surface);
   if (writer) {
     // The camera is fixed by the first picture (the intact mesh) and kept for the rest.
@@ -172,14 +185,13 @@ void run(const DrillOptions& o, const GlobalOptions& g) {
       (void)writer->write(ren);
     }
   }
-  const drill::SessionMemory mem = sim.memory_use();
   const std::size_t force_record = device.forces().size() * sizeof(drill::ForceSample);
   const std::size_t peak = peak_rss_bytes();
   if (!o.report.empty()) {
-    nlohmann::json r = drill_session_json(hierarchy, sim, so, before);
     r["mesh"] = o.mesh;
     r["surface_triangles"] = surface.triangles.size();
     r["memory"] = {{"peak_rss_bytes", peak},
+                   {"session_peak_rss_bytes", session_peak},
                    {"nodes_bytes", mem.nodes},
                    {"v_lists_bytes", mem.v_lists},
                    {"hash_bytes", mem.hash},

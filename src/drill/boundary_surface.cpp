@@ -1020,15 +1020,22 @@ std::uint32_t BoundarySurface::rebuild_range(const TetHierarchy& h, std::uint32_
     }
     const std::uint32_t span = 1U << (3 * (level - d));
     const std::uint32_t ulo = c & ~(span - 1U);
-    auto& out = ch[ulo];
-    out.clear();
+    // The faces are collected in a per-thread scratch list and copied into the chunk's list
+    // at their exact count: a cleared list keeps its capacity and growth doubles it, and over
+    // a session the slack of thousands of small chunk lists, and of chunks the cut had
+    // emptied, was most of the v_lists' memory (docs/drilling.md, Memory).
+    thread_local std::vector<SurfaceFace> scratch;
+    scratch.clear();
     std::size_t visits = 0;
-    visit(h, wt, rk, node.depth, word, h.geometry(node), acr, out, visits);
+    visit(h, wt, rk, node.depth, word, h.geometry(node), acr, scratch, visits);
+    auto& out = ch[ulo];
+    out.assign(scratch.begin(), scratch.end());
+    if (out.capacity() > out.size() + out.size() / 4 + 2) out.shrink_to_fit();
     budget.visits.fetch_add(visits, std::memory_order_relaxed);
     rebuilt.push_back({r, ulo});
     for (std::uint32_t k = ulo + 1; k < ulo + span; ++k) {
       if (ch[k].empty()) continue;
-      ch[k].clear();
+      ch[k] = {};
       rebuilt.push_back({r, k});
     }
     c = ulo + span;

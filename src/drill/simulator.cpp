@@ -84,11 +84,6 @@ Simulator::Simulator(TetHierarchy& hierarchy, HapticDevice& device, const Simula
   }
   // The render copy is kept as chunks; render_v_lists() is flattened at stop() (building the
   // surface's concatenated v_lists here would keep a third copy of every face for nothing).
-  m_render_chunks.resize(hierarchy.root_count());
-  for (std::size_t r = 0; r < hierarchy.root_count(); ++r) {
-    m_render_chunks[r].resize(m_surface.chunk_count(r));
-    for (std::size_t c = 0; c < m_surface.chunk_count(r); ++c) m_render_chunks[r][c] = m_surface.chunk(r, c);
-  }
   m_tick_period.assign(options.max_haptic_ticks, 0.0);
   m_tick_compute.assign(options.max_haptic_ticks, 0.0);
   m_tick_force.assign(options.max_haptic_ticks, 0.0);
@@ -138,6 +133,13 @@ void Simulator::start() {
   m_timed_out = false;
   m_stats = {};
   m_stats.surface_threads = m_surface.options().threads;
+  // The render consumer's copy starts as the surface is now.
+  m_render_lists = {};
+  m_render_chunks.assign(m_hierarchy.root_count(), {});
+  for (std::size_t r = 0; r < m_hierarchy.root_count(); ++r) {
+    m_render_chunks[r].resize(m_surface.chunk_count(r));
+    for (std::size_t c = 0; c < m_surface.chunk_count(r); ++c) m_render_chunks[r][c] = m_surface.chunk(r, c);
+  }
   m_start_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count();
   // Initial pose and contact model before the threads run.
   if (m_device.has_pose()) {
@@ -169,9 +171,19 @@ void Simulator::stop() {
       root[c.chunk] = m_surface.chunk(c.root, c.chunk);
     }
   }
+  // The render copy becomes render_v_lists(): each chunk is freed as it is appended, so the
+  // copy is never held twice (start() copies the chunks again from the surface).
   m_render_lists.assign(m_render_chunks.size(), {});
-  for (std::size_t r = 0; r < m_render_chunks.size(); ++r)
-    for (const auto& c : m_render_chunks[r]) m_render_lists[r].insert(m_render_lists[r].end(), c.begin(), c.end());
+  for (std::size_t r = 0; r < m_render_chunks.size(); ++r) {
+    std::size_t n = 0;
+    for (const auto& c : m_render_chunks[r]) n += c.size();
+    m_render_lists[r].reserve(n);
+    for (auto& c : m_render_chunks[r]) {
+      m_render_lists[r].insert(m_render_lists[r].end(), c.begin(), c.end());
+      c = {};
+    }
+  }
+  m_render_chunks.clear();
   const std::size_t n = std::min(m_stats.haptic_ticks, m_tick_period.size());
   m_stats.haptic_period_s.assign(m_tick_period.begin() + (n > 0 ? 1 : 0), m_tick_period.begin() + static_cast<std::ptrdiff_t>(n));
   m_stats.force_compute_time_s.assign(m_tick_compute.begin(), m_tick_compute.begin() + static_cast<std::ptrdiff_t>(n));

@@ -161,6 +161,9 @@ class Simulator {
   [[nodiscard]] const BoundarySurface& surface() const noexcept { return m_surface; }
   /// The render consumer's copy of the v_lists (call after stop()).
   [[nodiscard]] const std::vector<std::vector<SurfaceFace>>& render_v_lists() const noexcept { return m_render_lists; }
+  /// Moves the render consumer's copy of the v_lists out (call after stop(); afterwards
+  /// render_v_lists() is empty): lets a caller free the simulator before using the surface.
+  [[nodiscard]] std::vector<std::vector<SurfaceFace>> take_render_v_lists() noexcept { return std::move(m_render_lists); }
   [[nodiscard]] const Tool& tool() const noexcept { return m_tool; }
   /// The session's memory by part, as it is now (call after stop() for the final figures).
   [[nodiscard]] SessionMemory memory_use() const noexcept;
