@@ -121,7 +121,7 @@ NiftiHeader read_nifti_header(const std::string& path) {
 
 bool nifti_is_float(const NiftiHeader& header) { return header.datatype == 16 || header.datatype == 64; }
 
-NiftiVoxelScan check_nifti_voxels(const std::string& path, const NiftiHeader& header) {
+NiftiVoxelScan check_nifti_voxels(const std::string& path, const NiftiHeader& header, bool scan_floats) {
   const std::uint64_t needed = header.voxel_offset > UINT64_MAX - header.voxel_bytes
                                    ? UINT64_MAX
                                    : header.voxel_offset + header.voxel_bytes;
@@ -130,7 +130,7 @@ NiftiVoxelScan check_nifti_voxels(const std::string& path, const NiftiHeader& he
                                      "(truncated?)",
                                      how, have, header.voxel_bytes, header.voxel_offset));
   };
-  const bool is_float = nifti_is_float(header);
+  const bool is_float = scan_floats && nifti_is_float(header);
   if (!gz_name(path)) {
     std::error_code ec;
     const auto size = std::filesystem::file_size(path, ec);

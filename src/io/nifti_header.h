@@ -49,13 +49,12 @@ struct NiftiVoxelScan {
   std::uint64_t first_non_finite = 0;  ///< linear index of the first one
 };
 
-/// Checks that @p path holds all of the voxel bytes @p header declares: the file size of an
-/// integer .nii; otherwise the data are streamed through zlib (a few hundred KiB at a time)
-/// up to the last byte needed — a .nii.gz's decompressed length, and for float data every
-/// value, counting the non-finite ones. A gzip stream that is cut short or corrupt is
-/// reported as such.
+/// Checks that @p path holds all of the voxel bytes @p header declares: the file size of a
+/// .nii, the decompressed length of a .nii.gz (streamed through zlib a few hundred KiB at a
+/// time up to the last byte needed; a stream cut short or corrupt is reported as such). With
+/// @p scan_floats and float data, every value is streamed and the non-finite ones counted.
 /// @throws ido::IoError naming @p path, the bytes found and the bytes declared.
-NiftiVoxelScan check_nifti_voxels(const std::string& path, const NiftiHeader& header);
+NiftiVoxelScan check_nifti_voxels(const std::string& path, const NiftiHeader& header, bool scan_floats);
 
 /// Checks a MetaImage whose voxels are zlib-compressed inside the file (CompressedData =
 /// True, ElementDataFile = LOCAL): MetaIO reports a stream that does not inflate only on

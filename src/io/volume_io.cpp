@@ -80,7 +80,7 @@ image::Volume<float> to_volume(detail::RawVolume raw, const std::string& path) {
 
 /// A NIfTI file read through ITK, with the checks ITK's reader (niftilib) leaves out: it
 /// zero-fills missing voxel bytes, turns NaN and infinite floats into 0 and a spacing of 0,
-/// -1 or NaN into 1 (nifti_header.h).
+/// -1 or NaN into 1 (nifti_header.h). The spacing is judged from the header before ITK reads.
 detail::RawVolume read_nifti(const std::string& path) {
   const detail::NiftiHeader header = detail::read_nifti_header(path);
   std::array<double, 3> spacing{1.0, 1.0, 1.0};
@@ -89,22 +89,22 @@ detail::RawVolume read_nifti(const std::string& path) {
   detail::check_volume_spacing(path, spacing);
   const bool gz = ends_with(path, ".gz");
   const bool is_float = detail::nifti_is_float(header);
-  // Float data are streamed once before ITK reads them (their NaNs would come back as 0), an
-  // uncompressed file's length is known up front.
-  if (!gz || is_float) {
-    const auto scan = detail::check_nifti_voxels(path, header);
+  // An uncompressed file's length is known up front; a gzip stream's only by decompressing it.
+  if (!gz) (void)detail::check_nifti_voxels(path, header, /*scan_floats=*/false);
+  detail::RawVolume raw = detail::itk_read_file(path, VolumeKind::Nifti);
+  // niftilib leaves stored 0 (after ITK's rescaling: 0 or scl_inter) where a short stream
+  // ended — at the end of the voxels — and in place of every NaN or infinite float. Only when
+  // such values are there is the file streamed a second time (counting its bytes, and its
+  // non-finite floats); a scan without them was read whole and costs nothing more.
+  const float zero_fill = static_cast<float>(header.scl_inter);
+  auto is_fill = [&](float v) { return v == 0.0f || v == zero_fill; };
+  const bool suspect = is_float ? std::any_of(raw.voxels.begin(), raw.voxels.end(), is_fill)
+                                : gz && !raw.voxels.empty() && is_fill(raw.voxels.back());
+  if (suspect) {
+    const auto scan = detail::check_nifti_voxels(path, header, /*scan_floats=*/true);
     if (scan.non_finite > 0)
       throw_non_finite(path, scan.non_finite, header.voxel_count, scan.first_non_finite,
                        Index3{header.dim[1], header.dim[0] >= 2 ? header.dim[2] : 1, header.dim[0] >= 3 ? header.dim[3] : 1});
-  }
-  detail::RawVolume raw = detail::itk_read_file(path, VolumeKind::Nifti);
-  // An integer .nii.gz that ends early ends in voxels of stored value 0 (after ITK's
-  // rescaling: 0 or scl_inter). Only then is the stream decompressed a second time to count
-  // its bytes; a scan whose last voxel holds anything else was read whole and costs nothing
-  // more.
-  if (gz && !is_float && !raw.voxels.empty()) {
-    const float last = raw.voxels.back();
-    if (last == 0.0f || last == static_cast<float>(header.scl_inter)) (void)detail::check_nifti_voxels(path, header);
   }
   return raw;
 }

@@ -168,7 +168,15 @@ TEST(CliBadVolume, NonFiniteVoxelsAreRefused) {
   image::Volume<float> one_inf(Index3{6, 5, 4}, Vec3(1, 1, 1), Vec3(0, 0, 0), Mat3::Identity(), 1.0f);
   one_inf(2, 3, 1) = std::numeric_limits<float>::infinity();
   io::write_volume(dir / "inf.nrrd", one_inf);
+  // NIfTI's reader (niftilib) turns a NaN into 0: one among ones must still be found.
+  image::Volume<float> one_nan(Index3{6, 5, 4}, Vec3(1, 1, 1), Vec3(0, 0, 0), Mat3::Identity(), 1.0f);
+  one_nan(5, 4, 3) = nan;
+  io::write_volume(dir / "one_nan.nii.gz", one_nan);
+  io::write_volume(dir / "one_nan.nii", one_nan);
   const auto before = names_in(dir);
+  for (const char* name : {"one_nan.nii.gz", "one_nan.nii"})
+    expect_refused(run_measured("info " + q(dir / name)), dir / name,
+                   "1 of 120 voxels are not finite (NaN or infinite), the first at voxel (5, 4, 3)");
   expect_refused(run_measured("info " + q(dir / "nan.nii.gz")), dir / "nan.nii.gz", "120 of 120 voxels are not finite");
   expect_refused(run_measured("convert " + q(dir / "inf.nrrd") + " " + q(dir / "o.nii")), dir / "inf.nrrd",
                  "1 of 120 voxels are not finite (NaN or infinite), the first at voxel (2, 3, 1)");
