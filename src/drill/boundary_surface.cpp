@@ -674,15 +674,15 @@ BoundarySurface& BoundarySurface::operator=(BoundarySurface&&) noexcept = defaul
 std::size_t BoundarySurface::face_count() const noexcept {
   std::size_t n = 0;
   for (const auto& root : m_chunks)
-    for (const auto& c : root) n += c.size();
+    for (const auto& c : root) n += c ? c->size() : 0;
   return n;
 }
 
 std::size_t BoundarySurface::memory_bytes() const noexcept {
-  std::size_t n = (m_chunks.capacity() + m_flat.capacity()) * sizeof(std::vector<SurfaceFace>);
+  std::size_t n = m_chunks.capacity() * sizeof(std::vector<ChunkList>) + m_flat.capacity() * sizeof(std::vector<SurfaceFace>);
   for (const auto& root : m_chunks) {
-    n += root.capacity() * sizeof(std::vector<SurfaceFace>);
-    for (const auto& c : root) n += c.capacity() * sizeof(SurfaceFace);
+    n += root.capacity() * sizeof(ChunkList);
+    for (const auto& c : root) n += c ? sizeof(std::vector<SurfaceFace>) + 16 + c->capacity() * sizeof(SurfaceFace) : 0;
   }
   for (const auto& flat : m_flat) n += flat.capacity() * sizeof(SurfaceFace);
   return n;
@@ -692,7 +692,8 @@ const std::vector<SurfaceFace>& BoundarySurface::v_list(std::size_t r) const {
   if (m_flat_stale[r]) {
     auto& flat = m_flat[r];
     flat.clear();
-    for (const auto& c : m_chunks[r]) flat.insert(flat.end(), c.begin(), c.end());
+    for (const auto& c : m_chunks[r])
+      if (c) flat.insert(flat.end(), c->begin(), c->end());
     m_flat_stale[r] = 0;
   }
   return m_flat[r];
@@ -706,7 +707,7 @@ const std::vector<std::vector<SurfaceFace>>& BoundarySurface::v_lists() const {
 
 void BoundarySurface::rebuild_all(const TetHierarchy& hierarchy) {
   const std::size_t n = hierarchy.root_count();
-  m_chunks.assign(n, std::vector<std::vector<SurfaceFace>>(1));
+  m_chunks.assign(n, std::vector<ChunkList>(1));
   m_flat.assign(n, {});
   m_flat_stale.assign(n, 0);
   m_stale_roots.clear();
@@ -1020,22 +1021,21 @@ std::uint32_t BoundarySurface::rebuild_range(const TetHierarchy& h, std::uint32_
     }
     const std::uint32_t span = 1U << (3 * (level - d));
     const std::uint32_t ulo = c & ~(span - 1U);
-    // The faces are collected in a per-thread scratch list and copied into the chunk's list
-    // at their exact count: a cleared list keeps its capacity and growth doubles it, and over
-    // a session the slack of thousands of small chunk lists, and of chunks the cut had
-    // emptied, was most of the v_lists' memory (docs/drilling.md, Memory).
+    // The faces are collected in a per-thread scratch list and copied into a new list of
+    // their exact count (a cleared list kept its capacity and growth doubled it: over a
+    // session the slack of thousands of small chunk lists, and of chunks the cut had emptied,
+    // was most of the v_lists' memory; docs/drilling.md, "Session end and memory"). A new
+    // list, never the old one rewritten: the render consumer may still hold the old one.
     thread_local std::vector<SurfaceFace> scratch;
     scratch.clear();
     std::size_t visits = 0;
     visit(h, wt, rk, node.depth, word, h.geometry(node), acr, scratch, visits);
-    auto& out = ch[ulo];
-    out.assign(scratch.begin(), scratch.end());
-    if (out.capacity() > out.size() + out.size() / 4 + 2) out.shrink_to_fit();
+    ch[ulo] = scratch.empty() ? nullptr : std::make_shared<const std::vector<SurfaceFace>>(scratch.begin(), scratch.end());
     budget.visits.fetch_add(visits, std::memory_order_relaxed);
     rebuilt.push_back({r, ulo});
     for (std::uint32_t k = ulo + 1; k < ulo + span; ++k) {
-      if (ch[k].empty()) continue;
-      ch[k] = {};
+      if (!ch[k]) continue;
+      ch[k] = nullptr;
       rebuilt.push_back({r, k});
     }
     c = ulo + span;

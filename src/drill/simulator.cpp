@@ -96,9 +96,14 @@ SessionMemory Simulator::memory_use() const noexcept {
   m.nodes = m_hierarchy.node_storage_capacity_bytes();
   m.hash = m_hierarchy.root_hash().memory_bytes();
   m.v_lists = m_surface.memory_bytes();
-  for (const auto& root : m_render_chunks) {
-    m.v_lists += root.capacity() * sizeof(std::vector<SurfaceFace>);
-    for (const auto& c : root) m.v_lists += c.capacity() * sizeof(SurfaceFace);
+  // The render copy's lists count where the surface no longer holds them.
+  for (std::size_t r = 0; r < m_render_chunks.size(); ++r) {
+    m.v_lists += m_render_chunks[r].capacity() * sizeof(m_render_chunks[r][0]);
+    for (std::size_t c = 0; c < m_render_chunks[r].size(); ++c) {
+      const auto& list = m_render_chunks[r][c];
+      if (list && (c >= m_surface.chunk_count(r) || list != m_surface.shared_chunk(r, c)))
+        m.v_lists += list->capacity() * sizeof(SurfaceFace);
+    }
   }
   for (const auto& l : m_render_lists) m.v_lists += l.capacity() * sizeof(SurfaceFace);
   m.buffers = (m_tick_period.capacity() + m_tick_compute.capacity() + m_tick_force.capacity()) * sizeof(double);
@@ -138,7 +143,7 @@ void Simulator::start() {
   m_render_chunks.assign(m_hierarchy.root_count(), {});
   for (std::size_t r = 0; r < m_hierarchy.root_count(); ++r) {
     m_render_chunks[r].resize(m_surface.chunk_count(r));
-    for (std::size_t c = 0; c < m_surface.chunk_count(r); ++c) m_render_chunks[r][c] = m_surface.chunk(r, c);
+    for (std::size_t c = 0; c < m_surface.chunk_count(r); ++c) m_render_chunks[r][c] = m_surface.shared_chunk(r, c);
   }
   m_start_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count();
   // Initial pose and contact model before the threads run.
@@ -168,7 +173,7 @@ void Simulator::stop() {
     for (const ChunkId& c : m_surface.last_rebuilt_chunks()) {
       auto& root = m_render_chunks[c.root];
       if (root.size() < m_surface.chunk_count(c.root)) root.resize(m_surface.chunk_count(c.root));
-      root[c.chunk] = m_surface.chunk(c.root, c.chunk);
+      root[c.chunk] = m_surface.shared_chunk(c.root, c.chunk);
     }
   }
   // The render copy becomes render_v_lists(): each chunk is freed as it is appended, so the
@@ -176,11 +181,11 @@ void Simulator::stop() {
   m_render_lists.assign(m_render_chunks.size(), {});
   for (std::size_t r = 0; r < m_render_chunks.size(); ++r) {
     std::size_t n = 0;
-    for (const auto& c : m_render_chunks[r]) n += c.size();
+    for (const auto& c : m_render_chunks[r]) n += c ? c->size() : 0;
     m_render_lists[r].reserve(n);
     for (auto& c : m_render_chunks[r]) {
-      m_render_lists[r].insert(m_render_lists[r].end(), c.begin(), c.end());
-      c = {};
+      if (c) m_render_lists[r].insert(m_render_lists[r].end(), c->begin(), c->end());
+      c = nullptr;
     }
   }
   m_render_chunks.clear();
@@ -286,7 +291,7 @@ void Simulator::send_pending() {
   snap->lists.reserve(m_pending.size());
   for (const ChunkId& c : m_pending) {
     snap->chunk_counts.push_back(static_cast<std::uint32_t>(m_surface.chunk_count(c.root)));
-    snap->lists.push_back(m_surface.chunk(c.root, c.chunk));
+    snap->lists.push_back(m_surface.shared_chunk(c.root, c.chunk));
   }
   if (m_snapshots.push(snap)) m_pending.clear();
 }
@@ -385,7 +390,8 @@ void Simulator::take_surface_snapshots(bool final) {
     if (!final && now < t) return;
     std::vector<std::vector<SurfaceFace>> lists(m_render_chunks.size());
     for (std::size_t r = 0; r < m_render_chunks.size(); ++r)
-      for (const auto& c : m_render_chunks[r]) lists[r].insert(lists[r].end(), c.begin(), c.end());
+      for (const auto& c : m_render_chunks[r])
+        if (c) lists[r].insert(lists[r].end(), c->begin(), c->end());
     m_snapshot_fn(t, lists);
     ++m_next_snapshot;
     ++m_stats.surface_snapshots;

@@ -109,7 +109,15 @@ class BoundarySurface {
   /// Chunk lists of root @p r: 1 (a root never refined) or 8^chunk_level.
   [[nodiscard]] std::size_t chunk_count(std::size_t r) const noexcept { return m_chunks[r].size(); }
   /// Faces of chunk @p c of root @p r.
-  [[nodiscard]] const std::vector<SurfaceFace>& chunk(std::size_t r, std::size_t c) const noexcept { return m_chunks[r][c]; }
+  [[nodiscard]] const std::vector<SurfaceFace>& chunk(std::size_t r, std::size_t c) const noexcept {
+    return m_chunks[r][c] ? *m_chunks[r][c] : kNoFaces;
+  }
+  /// The same list, shared: a rebuild never changes a list it has handed out, it replaces it
+  /// with a new one, so a consumer (the simulator's render thread) can keep this one while
+  /// the surface moves on, without copying it. Null for an empty list.
+  [[nodiscard]] std::shared_ptr<const std::vector<SurfaceFace>> shared_chunk(std::size_t r, std::size_t c) const noexcept {
+    return m_chunks[r][c];
+  }
   /// Node visits of the last update or rebuild (work done).
   [[nodiscard]] std::size_t last_visits() const noexcept { return m_visits; }
   /// Faces over all v_lists.
@@ -132,9 +140,14 @@ class BoundarySurface {
   void mark_faces(const TetHierarchy& hierarchy);
   void mark_root(std::uint32_t r);
 
+  using ChunkList = std::shared_ptr<const std::vector<SurfaceFace>>;
+  static inline const std::vector<SurfaceFace> kNoFaces{};
+
   BoundarySurfaceOptions m_options;
   std::uint32_t m_full_chunks = 1;  // 8^chunk_level
-  std::vector<std::vector<std::vector<SurfaceFace>>> m_chunks;
+  // Per root, its chunk lists (null when empty). Shared with the render consumer, which keeps
+  // the lists it was given (shared_chunk) until newer ones replace them: immutable once made.
+  std::vector<std::vector<ChunkList>> m_chunks;
   mutable std::vector<std::vector<SurfaceFace>> m_flat;
   mutable std::vector<std::uint8_t> m_flat_stale;
   mutable std::vector<std::uint32_t> m_stale_roots;

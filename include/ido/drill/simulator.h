@@ -178,7 +178,7 @@ class Simulator {
   struct Snapshot {
     std::vector<ChunkId> chunks;
     std::vector<std::uint32_t> chunk_counts;  // the root's chunk count, per entry
-    std::vector<std::vector<SurfaceFace>> lists;
+    std::vector<std::shared_ptr<const std::vector<SurfaceFace>>> lists;  // shared with the surface (immutable)
   };
 
   void haptic_loop();
@@ -201,7 +201,9 @@ class Simulator {
   SpscRing<std::unique_ptr<Snapshot>, 256> m_snapshots;
   std::vector<ChunkId> m_pending;  // changed chunks not yet sent (ring full)
 
-  std::vector<std::vector<std::vector<SurfaceFace>>> m_render_chunks;  // render consumer's copy
+  // The render consumer's copy: the chunk lists it was handed, shared with the surface until
+  // a rebuild replaces them there (BoundarySurface::shared_chunk), so no face is copied.
+  std::vector<std::vector<std::shared_ptr<const std::vector<SurfaceFace>>>> m_render_chunks;
   std::vector<std::vector<SurfaceFace>> m_render_lists;                // flattened (at stop)
   SurfaceSnapshotFn m_snapshot_fn;
   double m_snapshot_period_s = 0.0;
