@@ -54,8 +54,12 @@ struct GzFile {
   }
 };
 
-bool gz_name(const std::string& path) {
-  return path.size() >= 3 && (path.compare(path.size() - 3, 3, ".gz") == 0 || path.compare(path.size() - 3, 3, ".GZ") == 0);
+/// By content, not by name: a gzip stream starts with 1f 8b (niftilib reads either way).
+bool is_gzip_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  unsigned char magic[2] = {0, 0};
+  in.read(reinterpret_cast<char*>(magic), 2);
+  return in.gcount() == 2 && magic[0] == 0x1f && magic[1] == 0x8b;
 }
 
 }  // namespace
@@ -119,6 +123,8 @@ NiftiHeader read_nifti_header(const std::string& path) {
   return parse_nifti_header(buf, path);
 }
 
+bool nifti_is_gzip(const std::string& path) { return is_gzip_file(path); }
+
 bool nifti_is_float(const NiftiHeader& header) { return header.datatype == 16 || header.datatype == 64; }
 
 NiftiVoxelScan check_nifti_voxels(const std::string& path, const NiftiHeader& header, bool scan_floats) {
@@ -131,7 +137,7 @@ NiftiVoxelScan check_nifti_voxels(const std::string& path, const NiftiHeader& he
                                      how, have, header.voxel_bytes, header.voxel_offset));
   };
   const bool is_float = scan_floats && nifti_is_float(header);
-  if (!gz_name(path)) {
+  if (!is_gzip_file(path)) {
     std::error_code ec;
     const auto size = std::filesystem::file_size(path, ec);
     if (ec) throw IoError(path, "cannot read the file size: " + ec.message());

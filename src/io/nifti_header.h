@@ -40,6 +40,9 @@ NiftiHeader parse_nifti_header(std::string_view bytes, const std::string& name);
 /// Reads and parses the header of @p path (.nii or .nii.gz). @throws ido::IoError.
 NiftiHeader read_nifti_header(const std::string& path);
 
+/// True when @p path holds a gzip stream (by its first two bytes, whatever its name).
+[[nodiscard]] bool nifti_is_gzip(const std::string& path);
+
 /// True for float32 and float64 data, whose non-finite values niftilib silently turns into 0.
 [[nodiscard]] bool nifti_is_float(const NiftiHeader& header);
 

@@ -87,7 +87,10 @@ detail::RawVolume read_nifti(const std::string& path) {
   for (std::int64_t a = 1; a <= std::min<std::int64_t>(header.dim[0], 3); ++a)
     spacing[static_cast<std::size_t>(a - 1)] = header.pixdim[static_cast<std::size_t>(a)];
   detail::check_volume_spacing(path, spacing);
-  const bool gz = ends_with(path, ".gz");
+  const bool gz = detail::nifti_is_gzip(path);
+  // ITK's NIfTI reader takes a gzip stream only from a .nii.gz (it reads plain bytes from
+  // either name).
+  if (gz && !ends_with(path, ".gz")) throw IoError(path, "is gzip-compressed but not named .nii.gz (rename it)");
   const bool is_float = detail::nifti_is_float(header);
   // An uncompressed file's length is known up front; a gzip stream's only by decompressing it.
   if (!gz) (void)detail::check_nifti_voxels(path, header, /*scan_floats=*/false);

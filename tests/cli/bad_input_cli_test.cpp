@@ -128,8 +128,12 @@ TEST(CliBadVolume, GzipStreamCutShortIsRefused) {
   ASSERT_GT(gz.size(), 2000u);
   write_bytes(dir / "first200.nii.gz", gz.substr(0, 200));
   write_bytes(dir / "half.nii.gz", gz.substr(0, gz.size() / 2));
+  // ITK reads a gzip stream only from a .nii.gz: a misnamed file is told so.
+  write_bytes(dir / "gzip_named.nii", gz);
   // The whole file reads (the checks refuse only what is wrong).
   ASSERT_EQ(run_measured("info " + q(dir / "scan.nii.gz")).exit_code, 0);
+  expect_refused(run_measured("info " + q(dir / "gzip_named.nii")), dir / "gzip_named.nii",
+                 "is gzip-compressed but not named .nii.gz");
   const auto before = names_in(dir);
   expect_refused(run_measured("info " + q(dir / "first200.nii.gz")), dir / "first200.nii.gz", "cut short");
   expect_refused(run_measured("info " + q(dir / "half.nii.gz")), dir / "half.nii.gz", "gzip stream is cut short");
