@@ -1,12 +1,17 @@
 // SPDX-License-Identifier: Apache-2.0
 // `ido drill MESH --tool sphere:radius=MM[,shaft=MM] --path PATH.csv -o OUT.vtu ...
 //  [--snapshots DIR [--snapshot-every SECONDS] [--snapshot-size WxH]]`: runs a scripted tool
-// trajectory through the same three threads as an interactive session; pictures of the
+// trajectory through the same three threads as an interactive session, which ends when the
+// path ends (the erosion backlog is finished within SimulatorOptions::drain_limit_s, or the
+// report and a warning say what was left); pictures of the
 // drilled surface come from the render consumer's copies of the v_lists, rendered after the
 // session (the drill library knows nothing of viz).
 #include <fmt/format.h>
 
 #include <sys/resource.h>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 #include <algorithm>
 #include <cmath>
@@ -171,8 +176,14 @@ void run(const DrillOptions& o, const GlobalOptions& g) {
     st = sim.stats();
     lists = sim.take_render_v_lists();
   }
-  surface = drill::assemble_surface(lists, hierarchy.vertices());
-  lists = {};
+#if defined(__GLIBC__)
+  // The session's freed memory back to the system before the outputs are made: ido's heap
+  // policy keeps freed memory (ido/core/memory.h), and blocks above 32 MiB are mapped afresh,
+  // so the surface and the leaf mesh would come on top of it (depth 7 on the benchmark trace:
+  // process peak 319 -> 252 MiB, docs/drilling.md).
+  ::malloc_trim(0);
+#endif
+  surface = drill::assemble_surface(std::move(lists), hierarchy.vertices());
   const std::size_t session_peak = peak_rss_bytes();  // before the outputs are made
   io::write_tet_mesh(output_tmp, drill::full_leaf_mesh(hierarchy));
   if (!o.surface.empty()) io::write_triangle_mesh(surface_tmp, surface);
@@ -232,7 +243,10 @@ void setup(CLI::App& app, const GlobalOptions& g) {
   auto opts = std::make_shared<DrillOptions>();
   sub->add_option("MESH", opts->mesh, "Tetrahedral mesh (.vtu, .msh, .node)")->required();
   sub->add_option("--tool", opts->tool, "sphere:radius=MM[,shaft=MM][,samples=N]")->required();
-  sub->add_option("--path", opts->path, "Trajectory CSV: t,x,y,z[,qx,qy,qz,qw] (s, mm)")->required();
+  sub->add_option("--path", opts->path,
+                  "Trajectory CSV: t,x,y,z[,qx,qy,qz,qw] (s, mm), times increasing up to 3600 s, played in real time; "
+                  "an optional first line of names")
+      ->required();
   sub->add_option("-o,--output", opts->output, "Drilled mesh (.vtu): remaining leaf tetrahedra, depth and density")->required();
   sub->add_option("--surface", opts->surface, "Boundary surface (.stl, .ply, .vtp)");
   sub->add_option("--report", opts->report, "JSON report");

@@ -1148,8 +1148,13 @@ void split_edge_only_contacts(geometry::TriangleMesh& m) {
 
 }  // namespace
 
-geometry::TriangleMesh assemble_surface(std::span<const std::vector<SurfaceFace>> v_lists,
-                                        std::span<const Vec3> vertices_mm) {
+namespace {
+
+// assemble_surface over @p v_lists; release(r) is called once root r's faces are no longer
+// needed (the owning overload frees them there).
+template <class Release>
+geometry::TriangleMesh assemble(std::span<const std::vector<SurfaceFace>> v_lists, std::span<const Vec3> vertices_mm,
+                                Release&& release) {
   std::unordered_map<PointKey, std::int32_t, KeyHash> index;
   geometry::TriangleMesh mesh;
   auto vertex = [&](const PointKey& k) {
@@ -1194,9 +1199,24 @@ geometry::TriangleMesh assemble_surface(std::span<const std::vector<SurfaceFace>
         root_field.values.push_back(static_cast<double>(r));
       }
     }
+    release(r);
   }
+  index = {};  // the keys' map is not needed by the split: free it first
   split_edge_only_contacts(mesh);
   return mesh;
+}
+
+}  // namespace
+
+geometry::TriangleMesh assemble_surface(std::span<const std::vector<SurfaceFace>> v_lists,
+                                        std::span<const Vec3> vertices_mm) {
+  return assemble(v_lists, vertices_mm, [](std::size_t) {});
+}
+
+geometry::TriangleMesh assemble_surface(std::vector<std::vector<SurfaceFace>>&& v_lists,
+                                        std::span<const Vec3> vertices_mm) {
+  auto lists = std::move(v_lists);
+  return assemble(lists, vertices_mm, [&lists](std::size_t r) { lists[r] = {}; });
 }
 
 }  // namespace ido::drill

@@ -176,5 +176,9 @@ class BoundarySurface {
 /// volume is unchanged; a format that welds by position, such as STL, joins them again).
 [[nodiscard]] geometry::TriangleMesh assemble_surface(std::span<const std::vector<SurfaceFace>> v_lists,
                                                       std::span<const Vec3> vertices_mm);
+/// The same, taking the v_lists over and freeing each root's faces once they are made into
+/// triangles (for large surfaces: the faces, 96 bytes each, are not held during the split).
+[[nodiscard]] geometry::TriangleMesh assemble_surface(std::vector<std::vector<SurfaceFace>>&& v_lists,
+                                                      std::span<const Vec3> vertices_mm);
 
 }  // namespace ido::drill
