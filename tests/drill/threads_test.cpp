@@ -330,6 +330,29 @@ TEST(HapticDevice, CsvTrajectoryParsesAndInterpolates) {
   EXPECT_THROW((void)ScriptedTrajectory::load_csv(dir / "missing.csv"), IoError);
 }
 
+// The first line is a header only when every field is a name; a script is played in real
+// time, so a time past kMaxScriptDuration_s is refused at its line (file and constructor).
+TEST(HapticDevice, CsvHeaderIsNamesOnlyAndTimesAreBounded) {
+  const auto dir = test::scratch_dir("drill_csv_header");
+  const auto line_of = [&](const std::string& name, const std::string& text) -> std::int64_t {
+    std::ofstream(dir / name) << text;
+    try {
+      (void)ScriptedTrajectory::load_csv(dir / name);
+    } catch (const IoError& e) {
+      return e.location().line.value_or(-1);
+    }
+    return 0;  // accepted
+  };
+  EXPECT_EQ(line_of("data.csv", "0,10,10,abc\n1,10,10,5\n"), 1);  // data with a bad field
+  EXPECT_EQ(line_of("names.csv", "# a path\ntime,x,y,z\n0,1,1,1\n1,2,2,2\n"), 0);
+  EXPECT_EQ(line_of("second.csv", "t,x,y,z\nt,x,y,z\n0,1,1,1\n"), 2);  // one header only
+  EXPECT_EQ(line_of("long.csv", "t,x,y,z\n0,1,1,1\n3600,1,1,2\n3600.5,1,1,3\n"), 4);
+  EXPECT_EQ(line_of("huge.csv", "t,x,y,z\n0,1,1,1\n1e30,1,1,2\n"), 3);
+  std::vector<ToolPose> p(2);
+  EXPECT_THROW(ScriptedTrajectory({0.0, 1e30}, p), InvalidInput);
+  EXPECT_NO_THROW(ScriptedTrajectory({0.0, kMaxScriptDuration_s}, p));
+}
+
 TEST(UdpBridge, PacketsRoundTrip) {
   PosePacket p;
   p.sequence = 7;
