@@ -47,16 +47,3 @@ function(ido_add_test name)
   endif()
   gtest_discover_tests(${name} PROPERTIES ${props} DISCOVERY_TIMEOUT 60)
 endfunction()
-
-# ido_existing_sources(OUT file...): OUT = the list, after checking that every file exists in
-# the current source folder; a missing one is a configure error. Kept only for
-# src/segment/CMakeLists.txt, which is to pass its list to ido_add_module directly; then
-# delete this function.
-function(ido_existing_sources out)
-  foreach(f IN LISTS ARGN)
-    if(NOT EXISTS ${CMAKE_CURRENT_SOURCE_DIR}/${f})
-      message(FATAL_ERROR "${CMAKE_CURRENT_SOURCE_DIR}: listed source ${f} does not exist")
-    endif()
-  endforeach()
-  set(${out} ${ARGN} PARENT_SCOPE)
-endfunction()

@@ -22,6 +22,7 @@
 #include "ido/io/volume_io.h"
 #include "ido/segment/balloon.h"
 #include "ido/segment/calcification.h"
+#include "ido/segment/organ.h"
 #include "ido/viz/renderer.h"
 #include "snapshots.h"
 
@@ -39,6 +40,7 @@ struct SegmentCliOptions {
   std::string mask;
   std::string report;
   bool bone = false;
+  std::string organ = "generic";
   bool white_noise = false;
   std::optional<double> calcium;
   double calcium_reach_mm = 4.0;
@@ -134,9 +136,33 @@ image::Volume<float> seed_slice(const image::Volume<float>& ct, const Vec3& seed
   return out;
 }
 
+/// The leak control's part of the report: the seed region's radius, the chamber radius, the
+/// neighbour markers and every leak event.
+nlohmann::json leak_control_json(const segment::BalloonReport& rep) {
+  nlohmann::json events = nlohmann::json::array(), markers = nlohmann::json::array();
+  for (const segment::LeakEvent& e : rep.leaks)
+    events.push_back({{"cause", segment::leak_cause_name(e.cause)},
+                      {"position_mm", {e.position_mm.x(), e.position_mm.y(), e.position_mm.z()}},
+                      {"iteration", e.iteration},
+                      {"neck_area_mm2", e.neck_area_mm2},
+                      {"neck_radius_mm", e.neck_radius_mm}});
+  for (const Vec3& m : rep.neighbour_markers_mm) markers.push_back({m.x(), m.y(), m.z()});
+  return {{"seed_radius_mm", rep.seed_radius_mm},
+          {"chamber_radius_mm", std::isfinite(rep.chamber_radius_mm) ? nlohmann::json(rep.chamber_radius_mm) : nlohmann::json(nullptr)},
+          {"neighbour_markers_mm", markers},
+          {"events", events}};
+}
+
 void run(const SegmentCliOptions& o, const GlobalOptions& g) {
   if (o.seeds.empty() && o.seed_voxels.empty()) throw InvalidInput("give at least one --seed X,Y,Z or --seed-voxel I,J,K");
   check_balloon_arguments("--", o.reference, o.tolerance, o.edge_reach_voxels, o.outside_level);
+  segment::Organ organ = segment::Organ::Generic;
+  try {
+    organ = segment::parse_organ(o.organ);
+  } catch (const InvalidInput& e) {
+    throw InvalidInput(fmt::format("--{}", e.what()));
+  }
+  if (o.max_iterations < 1) throw InvalidInput(fmt::format("--max-iterations must be at least 1, got {}", o.max_iterations));
   if (o.calcium && !std::isfinite(*o.calcium)) throw InvalidInput("--calcium must be a finite intensity");
   if (!(o.calcium_reach_mm > 0) || !std::isfinite(o.calcium_reach_mm))
     throw InvalidInput(fmt::format("--calcium-reach must be a positive length in mm, got {}", o.calcium_reach_mm));
@@ -168,14 +194,14 @@ void run(const SegmentCliOptions& o, const GlobalOptions& g) {
       throw InvalidInput(fmt::format("--seed-voxel {}: outside the {}x{}x{} volume", s, ct.size(0), ct.size(1), ct.size(2)));
     seeds.push_back(ct.index_to_world(Vec3(double(idx[0]), double(idx[1]), double(idx[2]))));
   }
-  segment::BalloonOptions bo;
+  segment::BalloonOptions bo = segment::organ_options(organ);
   bo.reference = o.reference;
   bo.tolerance = o.tolerance;
-  bo.accept_brighter = o.bone;
+  bo.accept_brighter = bo.accept_brighter || o.bone;
   if (o.white_noise) bo.estimate.residual_ball_factor = 5.0;
   bo.max_iterations = o.max_iterations;
-  bo.edge_reach_voxels = o.edge_reach_voxels;
-  bo.outside_level = o.outside_level;
+  if (o.edge_reach_voxels > 0) bo.edge_reach_voxels = o.edge_reach_voxels;
+  if (o.outside_level) bo.outside_level = o.outside_level;
   if (!o.roi.empty()) bo.roi_mm = parse_roi(o.roi);
   auto progress = make_progress(g.quiet);
   std::vector<KeptSurface> kept;
@@ -232,8 +258,10 @@ void run(const SegmentCliOptions& o, const GlobalOptions& g) {
         {"tolerance", rep.model.tolerance},
         {"accept_brighter", rep.model.accept_brighter},
         {"iterations", rep.iterations},
-        {"edge_reach_voxels", o.edge_reach_voxels},
-        {"outside_level", o.outside_level ? nlohmann::json(*o.outside_level) : nlohmann::json(nullptr)},
+        {"organ", o.organ},
+        {"edge_reach_voxels", bo.edge_reach_voxels},
+        {"outside_level", bo.outside_level ? nlohmann::json(*bo.outside_level) : nlohmann::json(nullptr)},
+        {"leak_control", leak_control_json(rep)},
         {"seconds", rep.seconds},
         {"phase_seconds",
          {{"setup", rep.phase_seconds.setup},
@@ -285,7 +313,15 @@ void run(const SegmentCliOptions& o, const GlobalOptions& g) {
     if (calcified)
       std::printf("calcification above %g: %lld plaque voxels (%.1f mm3) added\n", *o.calcium,
                   static_cast<long long>(calcified->plaque_voxels), calcified->plaque_volume_mm3);
-    if (rep.leak_warning) std::printf("warning: the volume was still growing when a safeguard stopped it (leak?)\n");
+    for (const segment::LeakEvent& e : rep.leaks)
+      std::printf("leak stopped (%s) at (%.1f, %.1f, %.1f) mm, step %lld: neck radius %.1f mm\n",
+                  segment::leak_cause_name(e.cause), e.position_mm.x(), e.position_mm.y(), e.position_mm.z(),
+                  static_cast<long long>(e.iteration), e.neck_radius_mm);
+    if (rep.stop_reason == "work_limit")
+      std::printf("warning: stopped by the work limit while still growing: a leak the leak control did not stop; "
+                  "give a stop point or a region of interest\n");
+    else if (rep.leak_warning)
+      std::printf("warning: the volume was still growing when a safeguard stopped it (leak?)\n");
     if (writer) std::printf("%zu snapshots written to %s\n", writer->files().size(), o.snapshots.c_str());
   }
 }
@@ -299,6 +335,9 @@ void setup(CLI::App& app, const GlobalOptions& g) {
   sub->add_option("--reference", opts->reference, "organ grey level (e.g. HU); estimated at the seeds if omitted");
   sub->add_option("--tolerance", opts->tolerance, "accepted departure from the reference (same units)");
   sub->add_option("--roi", opts->roi, "region of interest x0,y0,z0,x1,y1,z1 (world mm), a safeguard");
+  sub->add_option("--organ", opts->organ,
+                  "what the seed is in: generic (default), artery, vein (contrast CT vessels: the lumen), vertebra "
+                  "(bone, kept apart from the vertebrae above and below); settings in docs/segmentation.md");
   sub->add_flag("--bone", opts->bone, "anything brighter than the reference also belongs (bone)");
   sub->add_flag("--white-noise", opts->white_noise,
                 "estimate the tolerance from the residual noise of a ball 5x the seed's (for uncorrelated noise, "

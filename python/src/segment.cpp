@@ -16,6 +16,7 @@
 #include "ido/segment/balloon.h"
 #include "ido/segment/calcification.h"
 #include "ido/segment/metrics.h"
+#include "ido/segment/organ.h"
 #include "ido/segment/phantom.h"
 
 namespace py = pybind11;
@@ -35,6 +36,10 @@ struct SegmentArgs {
   double edge_reach_voxels = 0.0;
   int max_iterations = 4000;
   std::optional<double> outside_level;
+  std::string organ = "generic";
+  std::vector<Vec3> stop_points;
+  std::optional<double> max_radius_mm;
+  bool leak_control = true;
 };
 
 BalloonOptions balloon_options(const SegmentArgs& a) {
@@ -42,13 +47,16 @@ BalloonOptions balloon_options(const SegmentArgs& a) {
     throw InvalidInput("tolerance must be positive and finite, got " + std::to_string(*a.tolerance));
   if (a.reference && !std::isfinite(*a.reference)) throw InvalidInput("reference must be finite");
   if (a.max_iterations < 1) throw InvalidInput("max_iterations must be at least 1");
-  BalloonOptions bo;
+  BalloonOptions bo = segment::organ_options(segment::parse_organ(a.organ));
   bo.reference = a.reference;
   bo.tolerance = a.tolerance;
-  bo.accept_brighter = a.bone;
+  bo.accept_brighter = bo.accept_brighter || a.bone;
   if (a.white_noise) bo.estimate.residual_ball_factor = 5.0;  // as `ido segment --white-noise`
-  bo.edge_reach_voxels = a.edge_reach_voxels;
-  bo.outside_level = a.outside_level;
+  if (a.edge_reach_voxels > 0) bo.edge_reach_voxels = a.edge_reach_voxels;
+  if (a.outside_level) bo.outside_level = a.outside_level;
+  bo.leak.enabled = a.leak_control;
+  bo.leak.stop_points_mm = a.stop_points;
+  if (a.max_radius_mm) bo.leak.max_radius_mm = *a.max_radius_mm;
   bo.max_iterations = a.max_iterations;
   if (a.roi) {
     const auto& r = *a.roi;
@@ -105,6 +113,20 @@ py::dict report_dict(const BalloonReport& r) {
   d["converged"] = r.converged;
   d["stop_reason"] = r.stop_reason;
   d["leak_warning"] = r.leak_warning;
+  py::list leaks;
+  for (const segment::LeakEvent& e : r.leaks) {
+    py::dict ev;
+    ev["cause"] = segment::leak_cause_name(e.cause);
+    ev["position_mm"] = e.position_mm;
+    ev["iteration"] = e.iteration;
+    ev["neck_area_mm2"] = e.neck_area_mm2;
+    ev["neck_radius_mm"] = e.neck_radius_mm;
+    leaks.append(ev);
+  }
+  d["leaks"] = leaks;
+  d["seed_radius_mm"] = r.seed_radius_mm;
+  d["chamber_radius_mm"] = r.chamber_radius_mm;
+  d["neighbour_markers_mm"] = r.neighbour_markers_mm;
   return d;
 }
 
@@ -144,7 +166,10 @@ void bind_segment(py::module_& m) {
       "accepts anything brighter than the reference; edge_reach_voxels bounds the final snap to the wall "
       "(0 = no limit); outside_level is the level of the tissue bounding the organ (e.g. 40 HU for a vessel's "
       "wall: the surface follows the lumen where lung or fat lies beyond the wall); calcium adds plaque "
-      "brighter than it within calcium_reach_mm of the lumen. Releases the GIL while it runs. Raises "
+      "brighter than it within calcium_reach_mm of the lumen. organ: generic, artery, vein or vertebra (settings "
+      "in docs/segmentation.md). Leak control (on unless leak_control=False): the front may not enter a "
+      "chamber wider than 2.5x the seed region's radius; stop_points (mm) close the band within 1.5x the local "
+      "radius of each; max_radius_mm closes wherever a ball that wide fits. The report lists each leak stopped. Releases the GIL while it runs. Raises "
       "ValueError for bad input.";
   m.def(
       "segment",
@@ -152,9 +177,10 @@ void bind_segment(py::module_& m) {
          const std::vector<std::array<std::int64_t, 3>>& seed_voxels, std::optional<double> reference,
          std::optional<double> tolerance, std::optional<std::array<double, 6>> roi, bool bone, bool white_noise,
          double edge_reach_voxels, int max_iterations, std::optional<double> calcium, double calcium_reach_mm,
-         std::optional<double> outside_level) {
-        const SegmentArgs a{reference,      tolerance, roi, bone, white_noise, edge_reach_voxels,
-                            max_iterations, outside_level};
+         std::optional<double> outside_level, const std::string& organ, const std::vector<Vec3>& stop_points,
+         std::optional<double> max_radius_mm, bool leak_control) {
+        const SegmentArgs a{reference,     tolerance,    roi,         bone,          white_noise, edge_reach_voxels,
+                            max_iterations, outside_level, organ,      stop_points,   max_radius_mm, leak_control};
         const BalloonOptions bo = balloon_options(a);
         const std::vector<Vec3> points = seed_points(ct, seeds, seed_voxels);
         py::gil_scoped_release unlocked;
@@ -167,7 +193,9 @@ void bind_segment(py::module_& m) {
       py::arg("reference") = py::none(), py::arg("tolerance") = py::none(), py::arg("roi") = py::none(),
       py::arg("bone") = false, py::arg("white_noise") = false, py::arg("edge_reach_voxels") = 0.0,
       py::arg("max_iterations") = 4000, py::arg("calcium") = py::none(), py::arg("calcium_reach_mm") = 4.0,
-      py::arg("outside_level") = py::none(), seg_doc);
+      py::arg("outside_level") = py::none(), py::arg("organ") = "generic",
+      py::arg("stop_points") = std::vector<Vec3>{}, py::arg("max_radius_mm") = py::none(),
+      py::arg("leak_control") = true, seg_doc);
 
   py::class_<segment::Balloon>(m, "Balloon",
                                "The balloon driven step by step: step() inflates once, surface shows the current "
@@ -177,9 +205,10 @@ void bind_segment(py::module_& m) {
                        const std::vector<std::array<std::int64_t, 3>>& seed_voxels, std::optional<double> reference,
                        std::optional<double> tolerance, std::optional<std::array<double, 6>> roi, bool bone,
                        bool white_noise, double edge_reach_voxels, int max_iterations,
-                       std::optional<double> outside_level) {
-             const SegmentArgs a{reference,      tolerance, roi, bone, white_noise, edge_reach_voxels,
-                                 max_iterations, outside_level};
+                       std::optional<double> outside_level, const std::string& organ,
+                       const std::vector<Vec3>& stop_points, std::optional<double> max_radius_mm, bool leak_control) {
+             const SegmentArgs a{reference,      tolerance,     roi,   bone,        white_noise,   edge_reach_voxels,
+                                 max_iterations, outside_level, organ, stop_points, max_radius_mm, leak_control};
              const BalloonOptions bo = balloon_options(a);
              const std::vector<Vec3> points = seed_points(ct, seeds, seed_voxels);
              py::gil_scoped_release unlocked;
@@ -189,7 +218,9 @@ void bind_segment(py::module_& m) {
            py::arg("seed_voxels") = std::vector<std::array<std::int64_t, 3>>{}, py::kw_only(),
            py::arg("reference") = py::none(), py::arg("tolerance") = py::none(), py::arg("roi") = py::none(),
            py::arg("bone") = false, py::arg("white_noise") = false, py::arg("edge_reach_voxels") = 0.0,
-           py::arg("max_iterations") = 4000, py::arg("outside_level") = py::none())
+           py::arg("max_iterations") = 4000, py::arg("outside_level") = py::none(), py::arg("organ") = "generic",
+           py::arg("stop_points") = std::vector<Vec3>{}, py::arg("max_radius_mm") = py::none(),
+           py::arg("leak_control") = true)
       .def(
           "step",
           [](segment::Balloon& b) {

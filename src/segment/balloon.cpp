@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <functional>
 #include <cmath>
 #include <map>
 #include <string>
@@ -150,6 +151,10 @@ struct Balloon::State {
   // search that found none (empty = every vertex). The next search then tests only the
   // triangles with such a corner against the others (geometry::self_intersections_touching).
   std::vector<std::uint8_t> dirty;
+  // Leak control: the territory, and per vertex the LeakCause that held it at the last step
+  // (0 = free), gathered into LeakEvents every intersection_interval steps.
+  LeakGuard guard;
+  std::vector<std::uint8_t> held;
   bool asleep(std::size_t i) const {
     return inflating && opt.sleep_steps > 0 && i < quiet.size() && quiet[i] >= opt.sleep_steps;
   }
@@ -348,6 +353,57 @@ struct Balloon::State {
       if (loud[std::size_t(t[0])] || loud[std::size_t(t[1])] || loud[std::size_t(t[2])])
         for (std::int32_t w : t) quiet[std::size_t(w)] = 0;
   }
+  // Gathers the held vertices of the last step into leak events: each edge-connected group of
+  // at least three is one place; a group near an event of the same cause updates it.
+  void record_leaks() {
+    if (held.size() != particles.size()) return;
+    const auto& x = particles.positions();
+    const std::size_t n = x.size();
+    std::vector<std::int32_t> parent(n);
+    for (std::size_t i = 0; i < n; ++i) parent[i] = std::int32_t(i);
+    std::function<std::int32_t(std::int32_t)> root = [&](std::int32_t a) {
+      while (parent[std::size_t(a)] != a) a = parent[std::size_t(a)] = parent[std::size_t(parent[std::size_t(a)])];
+      return a;
+    };
+    std::vector<double> area(n, 0.0);
+    for (const Tri& t : triangles) {
+      const double a = 0.5 * (x[t[1]] - x[t[0]]).cross(x[t[2]] - x[t[0]]).norm() / 3.0;
+      for (int k = 0; k < 3; ++k) {
+        const std::int32_t u = t[k], v = t[(k + 1) % 3];
+        if (held[std::size_t(u)]) area[std::size_t(u)] += a;
+        if (held[std::size_t(u)] && held[std::size_t(v)] && held[std::size_t(u)] == held[std::size_t(v)])
+          parent[std::size_t(root(u))] = root(v);
+      }
+    }
+    struct Group { Vec3 sum = Vec3::Zero(); double area = 0; int count = 0; std::uint8_t cause = 0; };
+    std::map<std::int32_t, Group> groups;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!held[i]) continue;
+      Group& gr = groups[root(std::int32_t(i))];
+      gr.sum += x[i];
+      gr.area += area[i];
+      ++gr.count;
+      gr.cause = held[i];
+    }
+    for (const auto& [r, gr] : groups) {
+      if (gr.count < 3) continue;
+      const Vec3 c = gr.sum / gr.count;
+      const double radius = std::sqrt(gr.area / kPi);
+      LeakEvent* near = nullptr;
+      for (LeakEvent& e : report.leaks)
+        if (std::uint8_t(e.cause) == gr.cause && (e.position_mm - c).norm() <= std::max(10.0 * h, 2.0 * std::max(radius, e.neck_radius_mm)))
+          near = &e;
+      if (near) {
+        if (gr.area > near->neck_area_mm2) {
+          near->neck_area_mm2 = gr.area;
+          near->neck_radius_mm = radius;
+          near->position_mm = c;
+        }
+        continue;
+      }
+      report.leaks.push_back({LeakCause(gr.cause), c, iteration, gr.area, radius});
+    }
+  }
   // One explicit step of the first-order dynamics. edge_stage switches the intensity
   // inflation for the edge attraction where a wall is within reach.
   void move(bool edge_stage) {
@@ -403,6 +459,7 @@ struct Balloon::State {
     const double reuse_move_mm = opt.edge_reuse_move_voxels * h;
     const double reuse_cos = std::cos(opt.edge_reuse_turn_deg * kPi / 180.0);
     std::vector<std::uint8_t> searched(n, 0);  // 1 = searched, 2 = kept its last wall
+    held.assign(n, 0);
     parallel_for(
         n,
         [&](std::size_t i) {
@@ -467,6 +524,21 @@ struct Balloon::State {
             return;
           }
           double sp = inflation_speed(I, model);
+          if (guard.active() && sp > 0) {
+            // The front may not enter a closed part of the band: a vertex inside one deflates,
+            // one whose next step would enter it holds (a cap across the neck).
+            LeakCause c = guard.cause_at(x[i]);
+            if (c != LeakCause::None) {
+              held[i] = std::uint8_t(c);
+              normal_mm[i] = -step;
+              return;
+            }
+            c = guard.cause_at(x[i] + nrm * step);
+            if (c != LeakCause::None) {
+              held[i] = std::uint8_t(c);
+              return;
+            }
+          }
           if (sp > 0 && edge_k > 0) {
             // Bone: only a fall of intensity along the outward normal is an edge to stop at;
             // a rise (marrow into the cortex of a thin pedicle or lamina) is more bone, and
@@ -541,6 +613,12 @@ struct Balloon::State {
           const double len = delta.norm();
           if (len > step) delta *= step / len;
           next[i] = x[i] + delta;
+          // Nothing moves outward into a closed part of the band (a vertex already in one may
+          // only go back): this holds the cap in the edge stage and against the smoothing too.
+          if (guard.active() && delta.dot(nrm) > 0 && guard.blocks(next[i])) {
+            next[i] = x[i];
+            delta = Vec3::Zero();
+          }
           if (edge_stage && !inflated_distance.empty()) {
             // Beyond the reach from the inflated surface, only moves back towards it.
             const double after = std::abs(inflated_distance.sample(next[i]));
@@ -587,6 +665,8 @@ Balloon::Balloon(const image::Volume<float>& ct, const std::vector<Vec3>& seeds_
     throw InvalidInput("balloon: the region of interest must have min < max on every axis");
   if (!(options.edge_reach_voxels >= 0) || !std::isfinite(options.edge_reach_voxels))
     throw InvalidInput("balloon: edge_reach_voxels must be 0 (no limit) or positive");
+  if (options.max_inflation_work < 0) throw InvalidInput("balloon: max_inflation_work must be 0 (no limit) or positive");
+  if (options.max_iterations < 1) throw InvalidInput("balloon: max_iterations must be at least 1");
   if (options.outside_level && !std::isfinite(*options.outside_level))
     throw InvalidInput("balloon: outside_level must be a finite number");
   m->opt = options;
@@ -607,6 +687,12 @@ Balloon::Balloon(const image::Volume<float>& ct, const std::vector<Vec3>& seeds_
                                                                     options.smoothing_sigma_voxels * m->h);
   m->model.reference = options.reference ? *options.reference : est.reference;
   m->model.tolerance = options.tolerance ? *options.tolerance : est.tolerance;
+  // An estimated band that reaches past half-way to the tissue bounding the organ would take
+  // that tissue too (a wide seed ball in low-contrast bone reaching down to muscle): cap it there.
+  if (!options.tolerance && options.outside_level) {
+    const double half_way = 0.5 * std::abs(m->model.reference - *options.outside_level);
+    if (half_way > 0 && half_way < m->model.tolerance) m->model.tolerance = half_way;
+  }
   m->model.accept_brighter = options.accept_brighter;
   // Bone reads its edge stop along the normal from the smoothed image; only vessels need |∇I|.
   if (options.edge_stop > 0 && !options.accept_brighter)
@@ -630,6 +716,10 @@ Balloon::Balloon(const image::Volume<float>& ct, const std::vector<Vec3>& seeds_
     }
   }
   m->report.model = m->model;
+  m->guard = LeakGuard(m->smoothed, m->model, seeds_mm, options.leak, options.roi_mm, options.threaded);
+  m->report.seed_radius_mm = m->guard.seed_radius_mm();
+  m->report.chamber_radius_mm = m->guard.chamber_radius_mm();
+  m->report.neighbour_markers_mm = m->guard.neighbour_markers_mm();
   geometry::TriangleMesh all;
   const double r0 = options.seed_radius_voxels * ct.spacing().mean();
   for (const Vec3& s : seeds_mm) {
@@ -657,6 +747,7 @@ bool Balloon::step() {
   State& s = *m;
   s.move(false);
   ++s.iteration;
+  if (s.guard.active() && s.iteration % s.opt.intersection_interval == 0) s.record_leaks();
   if (s.iteration % s.opt.remesh_interval == 0) s.remesh();
   if (s.iteration % s.opt.intersection_interval == 0) {
     s.handle_intersections();
@@ -667,6 +758,10 @@ bool Balloon::step() {
     s.done = true;
     s.report.leak_warning = true;
     s.report.stop_reason = "max_volume";
+  } else if (s.opt.max_inflation_work > 0 && s.report.inflation_vertex_steps > s.opt.max_inflation_work) {
+    s.done = true;
+    s.report.leak_warning = true;
+    s.report.stop_reason = "work_limit";
   } else if (s.iteration >= s.opt.max_iterations) {
     s.done = true;
     s.report.stop_reason = "max_iterations";
@@ -690,7 +785,8 @@ BalloonResult Balloon::run(Progress* progress) {
   s.inflating = false;
   // Thaw frozen vertices for the edge stage.
   for (std::size_t i = 0; i < s.particles.size(); ++i) s.particles.set_fixed(i, false);
-  if (s.opt.edge_refinement) {
+  // A run stopped by the work limit has flooded: its surface is no organ's wall to snap to.
+  if (s.opt.edge_refinement && s.report.stop_reason != "work_limit") {
     report(progress, 0.9, "snapping to edges");
     s.anchor_edge_stage();
     for (int it = 0; it < s.opt.edge_iterations; ++it) {

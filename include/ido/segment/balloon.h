@@ -14,6 +14,7 @@
 #include "ido/image/volume.h"
 #include "ido/segment/balloon_forces.h"
 #include "ido/segment/intensity_model.h"
+#include "ido/segment/leak_guard.h"
 #include "ido/sim/particles.h"
 
 namespace ido::segment {
@@ -41,9 +42,17 @@ struct BalloonOptions {
   int intersection_interval = 10;       ///< look for (and repair) self-intersections every this many steps, in the edge stage too
   int max_iterations = 4000;            ///< safeguard
   double max_volume_mm3 = INFINITY;     ///< safeguard; reaching it raises the leak warning
+  /// Safeguard on time: the inflation stops once it has moved this many vertices (awake vertex ×
+  /// step, BalloonReport::inflation_vertex_steps), which bounds a flood the leak control did not
+  /// stop to a few seconds (the shared scans need at most about 1 million). Reaching it raises the
+  /// leak warning and skips the edge stage. 0 = no limit.
+  std::int64_t max_inflation_work = 3'000'000;
   /// Optional region of interest (world mm, axis-aligned {min, max}): outside it the
   /// balloon deflates. A user safeguard, not the leak-stopping mechanism.
   std::optional<std::array<Vec3, 2>> roi_mm;
+  /// Leak control: the territory the front may enter (chambers wider than the seed region,
+  /// stop points, a radius bound, neighbour separation). See LeakGuard; on by default.
+  LeakControlOptions leak;
   int convergence_window = 20;          ///< steps between volume comparisons
   double convergence_rel_volume = 2e-3; ///< converged when |ΔV| / V over a window is below
   bool edge_refinement = true;          ///< final snap to the wall (edge attraction)
@@ -64,7 +73,9 @@ struct BalloonOptions {
   /// inside and this level rather than the far surroundings, i.e. at the lumen's boundary
   /// (edge_offset_along_normal). Unset (the default): the surroundings' own level. For CT
   /// vessels, soft tissue (about 40 HU) gives the lumen; leave it unset where the organ is
-  /// meant to include its wall. Measured: docs/segmentation.md.
+  /// meant to include its wall. It also caps an estimated tolerance at half the distance from
+  /// the reference to this level, so the band does not take the bounding tissue.
+  /// Measured: docs/segmentation.md.
   std::optional<double> outside_level;
   /// One-ring averaging passes of the wall offsets found by the edge stage. The per-vertex wall
   /// is noise-limited; 10 passes spread it over about a Gaussian of σ ≈ 2 edge lengths on the
@@ -142,7 +153,12 @@ struct BalloonReport {
   std::int64_t edge_profile_reuses = 0;    ///< edge-stage steps where a vertex kept its last wall
   bool converged = false;
   bool leak_warning = false;  ///< the volume kept growing until a safeguard stopped it
-  std::string stop_reason;    ///< "converged", "max_iterations" or "max_volume"
+  std::string stop_reason;    ///< "converged", "max_iterations", "max_volume" or "work_limit"
+  /// Leak control: every place where the front pressed against a closed part of the band.
+  std::vector<LeakEvent> leaks;
+  double seed_radius_mm = 0;             ///< the seed region's radius (LeakGuard::seed_radius_mm)
+  double chamber_radius_mm = INFINITY;   ///< radius past which the band is a chamber (infinity: none)
+  std::vector<Vec3> neighbour_markers_mm;  ///< markers put in neighbouring bodies (separate_neighbours)
 };
 
 /// Sets the mesh figures of @p report (volume, area, V/E/F, Euler characteristic, components,

@@ -1,0 +1,356 @@
+// SPDX-License-Identifier: Apache-2.0
+// The balloon's territory against leaks. Written by hand for ido: the opening by a ball uses
+// the project's distance transform (meshing::distance_to_mask); the floods and the geodesic
+// competition are plain breadth-first and Dijkstra passes over the voxel grid, for which no
+// packaged library fits the balloon's band and masks without copying them into its types.
+#include "ido/segment/leak_guard.h"
+
+#include <algorithm>
+#include <deque>
+#include <functional>
+#include <limits>
+#include <queue>
+
+#include "ido/core/error.h"
+#include "ido/image/filters.h"
+#include "ido/meshing/distance_field.h"
+
+namespace ido::segment {
+
+const char* leak_cause_name(LeakCause cause) noexcept {
+  switch (cause) {
+    case LeakCause::Chamber: return "chamber";
+    case LeakCause::StopPoint: return "stop_point";
+    case LeakCause::Neighbour: return "neighbour";
+    case LeakCause::None: break;
+  }
+  return "none";
+}
+
+namespace {
+
+struct Grid {
+  Index3 n;
+  std::size_t at(std::int64_t i, std::int64_t j, std::int64_t k) const {
+    return std::size_t(i + n[0] * (j + n[1] * k));
+  }
+  Index3 ijk(std::size_t l) const {
+    const auto q = std::int64_t(l);
+    return {q % n[0], (q / n[0]) % n[1], q / (n[0] * n[1])};
+  }
+  bool inside(std::int64_t i, std::int64_t j, std::int64_t k) const {
+    return i >= 0 && j >= 0 && k >= 0 && i < n[0] && j < n[1] && k < n[2];
+  }
+};
+
+std::optional<std::size_t> voxel_of(const image::Volume<float>& v, const Grid& g, const Vec3& p) {
+  const Vec3 idx = v.world_to_index(p);
+  const auto i = std::int64_t(std::lround(idx[0])), j = std::int64_t(std::lround(idx[1])),
+             k = std::int64_t(std::lround(idx[2]));
+  if (!g.inside(i, j, k)) return std::nullopt;
+  return g.at(i, j, k);
+}
+
+// Six-connected flood from @p starts through the voxels where @p open is nonzero.
+std::vector<std::uint8_t> flood(const Grid& g, const std::vector<std::uint8_t>& open, const std::vector<std::size_t>& starts) {
+  std::vector<std::uint8_t> reached(open.size(), 0);
+  std::deque<std::size_t> queue;
+  for (std::size_t s : starts)
+    if (open[s] && !reached[s]) {
+      reached[s] = 1;
+      queue.push_back(s);
+    }
+  static constexpr int kStep[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  while (!queue.empty()) {
+    const std::size_t l = queue.front();
+    queue.pop_front();
+    const Index3 c = g.ijk(l);
+    for (const auto& d : kStep) {
+      const std::int64_t i = c[0] + d[0], j = c[1] + d[1], k = c[2] + d[2];
+      if (!g.inside(i, j, k)) continue;
+      const std::size_t q = g.at(i, j, k);
+      if (open[q] && !reached[q]) {
+        reached[q] = 1;
+        queue.push_back(q);
+      }
+    }
+  }
+  return reached;
+}
+
+// Follows the inside distance uphill (26 neighbours) from @p l to a local maximum: the radius
+// of the region around a point placed anywhere in it.
+double ridge_radius(const Grid& g, const image::Volume<float>& inside, std::size_t l) {
+  const std::vector<float>& d = inside.data();
+  for (int guard = 0; guard < 10000; ++guard) {
+    const Index3 c = g.ijk(l);
+    std::size_t best = l;
+    for (int dk = -1; dk <= 1; ++dk)
+      for (int dj = -1; dj <= 1; ++dj)
+        for (int di = -1; di <= 1; ++di) {
+          const std::int64_t i = c[0] + di, j = c[1] + dj, k = c[2] + dk;
+          if (g.inside(i, j, k) && d[g.at(i, j, k)] > d[best]) best = g.at(i, j, k);
+        }
+    if (best == l) break;
+    l = best;
+  }
+  return double(d[l]);
+}
+
+// The mean of the smoothed image over a disc of @p radius_mm across @p axis at @p p.
+double disc_mean(const image::Volume<float>& v, const Vec3& p, const Vec3& axis, double radius_mm) {
+  const Vec3 u = axis.unitOrthogonal(), w = axis.cross(u);
+  double sum = v.sample(p);
+  for (int q = 0; q < 8; ++q) {
+    const double a = q * kPi / 4.0;
+    sum += v.sample(p + radius_mm * (std::cos(a) * u + std::sin(a) * w));
+  }
+  return sum / 9.0;
+}
+
+}  // namespace
+
+LeakGuard::LeakGuard(const image::Volume<float>& smoothed, const IntensityModel& model, const std::vector<Vec3>& seeds_mm,
+                     const LeakControlOptions& o, const std::optional<std::array<Vec3, 2>>& roi_mm, bool threaded) {
+  if (!(o.chamber_factor == 0 || (o.chamber_factor >= 1 && std::isfinite(o.chamber_factor))))
+    throw InvalidInput("leak control: chamber_factor must be 0 (off) or a finite number >= 1");
+  if (!(o.max_radius_mm > 0)) throw InvalidInput("leak control: max_radius_mm must be positive");
+  if (!(o.neighbour_search_mm > 0 && std::isfinite(o.neighbour_search_mm)))
+    throw InvalidInput("leak control: neighbour_search_mm must be a positive number");
+  if (!o.enabled || smoothed.empty() || seeds_mm.empty()) return;
+  const Grid g{smoothed.size()};
+  const std::size_t n = smoothed.data().size();
+  const double h = smoothed.spacing().minCoeff();
+  for (const Vec3& p : o.stop_points_mm)
+    if (!p.allFinite() || !voxel_of(smoothed, g, p))
+      throw InvalidInput("leak control: a stop point lies outside the volume");
+
+  // The band the balloon could fill, grown from the seeds.
+  std::vector<std::uint8_t> band(n, 0);
+  const std::vector<float>& I = smoothed.data();
+  {
+    // Noise punches single-voxel holes in a band that is one tolerance wide: the band is read
+    // from its indicator smoothed over a voxel (σ = h) and taken above one half, which fills
+    // such holes and drops isolated specks, so the region's inside distance measures its width.
+    image::Volume<float> indicator = smoothed.like<float>(0.0f);
+    for (std::size_t l = 0; l < n; ++l) indicator.data()[l] = intensity_departure(I[l], model) < model.tolerance ? 1.0f : 0.0f;
+    indicator = image::gaussian_smooth(indicator, h, {.threaded = threaded});
+    for (std::size_t l = 0; l < n; ++l) band[l] = indicator.data()[l] > 0.5f ? 1 : 0;
+  }
+  if (roi_mm)
+    for (std::size_t l = 0; l < n; ++l) {
+      if (!band[l]) continue;
+      const Index3 c = g.ijk(l);
+      const Vec3 p = smoothed.index_to_world(Vec3(double(c[0]), double(c[1]), double(c[2])));
+      if (((p.array() < (*roi_mm)[0].array()).any() || (p.array() > (*roi_mm)[1].array()).any())) band[l] = 0;
+    }
+  std::vector<std::size_t> starts;
+  for (const Vec3& s : seeds_mm)
+    if (const auto l = voxel_of(smoothed, g, s); l && band[*l]) starts.push_back(*l);
+  if (starts.empty()) return;  // the seeds sit outside their own band: nothing to guard
+  const std::vector<std::uint8_t> region = flood(g, band, starts);
+
+  // Inside distance of the region (mm to the nearest voxel centre outside it).
+  image::Volume<std::uint8_t> outside = smoothed.like<std::uint8_t>(0);
+  for (std::size_t l = 0; l < n; ++l) outside.data()[l] = region[l] ? 0 : 1;
+  const image::Volume<float> inside = meshing::distance_to_mask(outside, {.threaded = threaded});
+  for (std::size_t s : starts) m_seed_radius_mm = std::max(m_seed_radius_mm, ridge_radius(g, inside, s));
+  if (!std::isfinite(m_seed_radius_mm)) return;  // the band fills the whole grid: no scale to compare with
+
+  std::vector<std::uint8_t> cause(n, 0);
+  // Chambers: the opening of the region by a ball of radius R.
+  double R = o.chamber_factor > 0 ? o.chamber_factor * m_seed_radius_mm : INFINITY;
+  R = std::max(std::min(R, o.max_radius_mm), h);
+  if (std::isfinite(R)) {
+    image::Volume<std::uint8_t> core = smoothed.like<std::uint8_t>(0);
+    bool any = false;
+    for (std::size_t l = 0; l < n; ++l)
+      if (region[l] && inside.data()[l] > R) core.data()[l] = 1, any = true;
+    if (any) {
+      const image::Volume<float> to_core = meshing::distance_to_mask(core, {.threaded = threaded});
+      bool seed_in_chamber = false;
+      for (std::size_t s : starts) seed_in_chamber |= to_core.data()[s] <= R;
+      // A seed the opening covers is itself in a wide region (the user meant it): no chamber test.
+      if (!seed_in_chamber) {
+        m_chamber_radius_mm = R;
+        for (std::size_t l = 0; l < n; ++l)
+          if (region[l] && to_core.data()[l] <= R) cause[l] = std::uint8_t(LeakCause::Chamber);
+      }
+    }
+  }
+  // Stop points: a ball of 1.5 × the local radius (at least 2 voxels) around each.
+  for (const Vec3& p : o.stop_points_mm) {
+    const std::size_t l = *voxel_of(smoothed, g, p);
+    const double r = std::max(region[l] ? 1.5 * ridge_radius(g, inside, l) : 0.0, 2.0 * h);
+    const Vec3 c = smoothed.world_to_index(p);
+    Index3 lo, hi;
+    for (int a = 0; a < 3; ++a) {
+      const double ext = r / smoothed.spacing()[a] + 1;
+      lo[a] = std::max<std::int64_t>(0, std::int64_t(std::floor(c[a] - ext)));
+      hi[a] = std::min<std::int64_t>(g.n[a] - 1, std::int64_t(std::ceil(c[a] + ext)));
+    }
+    for (std::int64_t k = lo[2]; k <= hi[2]; ++k)
+      for (std::int64_t j = lo[1]; j <= hi[1]; ++j)
+        for (std::int64_t i = lo[0]; i <= hi[0]; ++i) {
+          const std::size_t q = g.at(i, j, k);
+          if (region[q] && (smoothed.index_to_world(Vec3(double(i), double(j), double(k))) - p).norm() <= r)
+            cause[q] = std::uint8_t(LeakCause::StopPoint);
+        }
+  }
+  for (std::size_t s : starts) cause[s] = 0;  // a seed is never closed to its own balloon
+  // What is reached from the seeds without crossing a closed voxel stays open; the rest of the
+  // region lies beyond a closure and takes its cause.
+  std::vector<std::uint8_t> open(n, 0);
+  for (std::size_t l = 0; l < n; ++l) open[l] = region[l] && !cause[l] ? 1 : 0;
+  std::vector<std::uint8_t> reach = flood(g, open, starts);
+  const auto beyond = std::uint8_t(std::isfinite(m_chamber_radius_mm) ? LeakCause::Chamber : LeakCause::StopPoint);
+  for (std::size_t l = 0; l < n; ++l)
+    if (region[l] && !reach[l] && !cause[l]) cause[l] = beyond;
+
+  if (o.separate_neighbours) {
+    // The long axis: the grid axis nearest the world's z (LPS: inferior → superior).
+    const Mat3& D = smoothed.direction();
+    int ax = 0;
+    for (int a = 1; a < 3; ++a)
+      if (std::abs(D(2, a)) > std::abs(D(2, ax))) ax = a;
+    const Vec3 axis = D.col(ax).normalized();
+    const double dt = 0.5 * h, disc_r = std::min(4.0, 0.25 * o.neighbour_search_mm);
+    const Vec3 s0 = seeds_mm.front();
+    const double depth = 0.3 * model.tolerance, look_mm = 15.0;
+    const auto w = std::max<std::ptrdiff_t>(1, std::lround(h / dt));
+    // The slab between two bodies along a direction d: a valley of the profile (averaged over a
+    // disc across d) deeper than 0.3 tolerance below both the highest value before it (the
+    // seed's end plate) and the highest within 15 mm after it (the neighbour's end plate, which
+    // must lie in the band). Returns {valley, that highest point after it, depth} in mm along d, or depth < 0.
+    struct Slab { double t_min = -1, t_back = -1, depth = -1; };
+    auto find_slab = [&](const Vec3& d) {
+      std::vector<double> prof;
+      for (double t = 0; t <= o.neighbour_search_mm + look_mm; t += dt) prof.push_back(disc_mean(smoothed, s0 + t * d, d, disc_r));
+      const auto m = std::ptrdiff_t(prof.size()), last = std::ptrdiff_t(o.neighbour_search_mm / dt);
+      const auto ahead = std::ptrdiff_t(look_mm / dt);
+      double p1 = prof[0];
+      for (std::ptrdiff_t i = 1; i <= last && i < m; ++i) {
+        p1 = std::max(p1, prof[std::size_t(i)]);
+        bool valley = true;
+        for (std::ptrdiff_t q = std::max<std::ptrdiff_t>(0, i - w); q <= std::min(m - 1, i + w); ++q)
+          valley = valley && prof[std::size_t(q)] >= prof[std::size_t(i)];
+        if (!valley) continue;
+        double p2 = -INFINITY;
+        std::ptrdiff_t at = i;
+        for (std::ptrdiff_t q = i; q <= std::min(m - 1, i + ahead); ++q)
+          if (prof[std::size_t(q)] > p2) p2 = prof[std::size_t(q)], at = q;
+        const double dep = std::min(p1, p2) - prof[std::size_t(i)];
+        // The far side must be of the organ's grey level (another body, not soft tissue past fat).
+        if (dep >= depth && intensity_departure(p2, model) < model.tolerance) return Slab{double(i) * dt, double(at) * dt, dep};
+      }
+      return Slab{};
+    };
+    const Vec3 side = D.col((ax + 1) % 3).normalized(), front = D.col((ax + 2) % 3).normalized();
+    for (const double sign : {1.0, -1.0}) {
+      // Up or down the axis; where no slab lies there, tilted by 15° and then 30° towards the
+      // four sides (the spine's curvature: the lumbosacral disc faces forward and down), the
+      // direction whose slab is deepest at the smallest tilt that has one.
+      Slab best;
+      Vec3 dir = sign * axis;
+      for (const double deg : {0.0, 15.0, 30.0}) {
+        for (const Vec3& toward : {side, Vec3(-side), front, Vec3(-front)}) {
+          const double a = deg * kPi / 180.0;
+          const Vec3 d = (std::cos(a) * sign * axis + std::sin(a) * toward).normalized();
+          const Slab sl = find_slab(d);
+          if (sl.depth > best.depth) best = sl, dir = d;
+          if (deg == 0.0) break;  // the axis itself once
+        }
+        if (best.depth >= 0) break;
+      }
+      const double t_min = best.t_min, t_back = best.t_back;
+      if (t_min < 0) continue;
+      // The marker: the first open voxel from the neighbour's end plate on, then back towards the slab.
+      std::vector<double> along;
+      for (double q = t_back + h; q <= t_back + look_mm; q += dt) along.push_back(q);
+      for (double q = t_back; q > t_min; q -= dt) along.push_back(q);
+      for (const double q : along) {
+        const auto l = voxel_of(smoothed, g, s0 + q * dir);
+        if (l && reach[*l]) {
+          const Index3 c = g.ijk(*l);
+          m_markers.push_back(smoothed.index_to_world(Vec3(double(c[0]), double(c[1]), double(c[2]))));
+          break;
+        }
+      }
+    }
+    if (!m_markers.empty()) {
+      // Geodesic competition inside the open region: 26 neighbours, steps in mm.
+      std::vector<float> dist(n, std::numeric_limits<float>::infinity());
+      std::vector<std::uint8_t> owner(n, 0);
+      using Item = std::pair<float, std::size_t>;
+      std::priority_queue<Item, std::vector<Item>, std::greater<>> heap;
+      auto push = [&](std::size_t l, std::uint8_t who) {
+        if (!reach[l] || dist[l] == 0.0f) return;
+        dist[l] = 0.0f;
+        owner[l] = who;
+        heap.emplace(0.0f, l);
+      };
+      for (std::size_t s : starts) push(s, 1);
+      for (const Vec3& p : m_markers) push(*voxel_of(smoothed, g, p), 2);
+      const Vec3 sp = smoothed.spacing();
+      while (!heap.empty()) {
+        const auto [dl, l] = heap.top();
+        heap.pop();
+        if (dl > dist[l]) continue;
+        const Index3 c = g.ijk(l);
+        for (int dk = -1; dk <= 1; ++dk)
+          for (int dj = -1; dj <= 1; ++dj)
+            for (int di = -1; di <= 1; ++di) {
+              const std::int64_t i = c[0] + di, j = c[1] + dj, k = c[2] + dk;
+              if ((di | dj | dk) == 0 || !g.inside(i, j, k)) continue;
+              const std::size_t q = g.at(i, j, k);
+              if (!reach[q]) continue;
+              const auto step = float(std::sqrt(di * di * sp[0] * sp[0] + dj * dj * sp[1] * sp[1] + dk * dk * sp[2] * sp[2]));
+              if (dl + step < dist[q]) {
+                dist[q] = dl + step;
+                owner[q] = owner[l];
+                heap.emplace(dist[q], q);
+              }
+            }
+      }
+      for (std::size_t l = 0; l < n; ++l)
+        if (reach[l] && owner[l] == 2) cause[l] = std::uint8_t(LeakCause::Neighbour);
+    }
+  }
+  // The balloon's vertices sit on the wall, half-way between band and surroundings, often in a
+  // voxel just outside the band: close two layers of such voxels around the closed ones (but
+  // none that touches the open band), so a held front cannot creep past a cap along the wall.
+  for (int layer = 0; layer < 2; ++layer) {
+    std::vector<std::uint8_t> grown = cause;
+    for (std::size_t l = 0; l < n; ++l) {
+      if (region[l] || cause[l]) continue;
+      const Index3 c = g.ijk(l);
+      std::uint8_t from = 0;
+      bool touches_open = false;
+      for (int dk = -1; dk <= 1 && !touches_open; ++dk)
+        for (int dj = -1; dj <= 1; ++dj)
+          for (int di = -1; di <= 1; ++di) {
+            const std::int64_t i = c[0] + di, j = c[1] + dj, k = c[2] + dk;
+            if (!g.inside(i, j, k)) continue;
+            const std::size_t q = g.at(i, j, k);
+            if (region[q] && !cause[q]) touches_open = true;
+            if (cause[q]) from = cause[q];
+          }
+      if (from && !touches_open) grown[l] = from;
+    }
+    cause = std::move(grown);
+  }
+  m_closed = smoothed.like<std::uint8_t>(0);
+  m_closed.data() = std::move(cause);
+}
+
+LeakCause LeakGuard::cause_at(const Vec3& p_mm) const noexcept {
+  if (m_closed.empty()) return LeakCause::None;
+  const Vec3 idx = m_closed.world_to_index(p_mm);
+  const auto i = std::int64_t(std::lround(idx[0])), j = std::int64_t(std::lround(idx[1])),
+             k = std::int64_t(std::lround(idx[2]));
+  const Index3& s = m_closed.size();
+  if (!(i >= 0 && j >= 0 && k >= 0 && i < s[0] && j < s[1] && k < s[2])) return LeakCause::None;
+  return LeakCause(m_closed(i, j, k));
+}
+
+}  // namespace ido::segment

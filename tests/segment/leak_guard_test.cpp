@@ -1,0 +1,135 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "ido/segment/leak_guard.h"
+
+#include <cmath>
+#include <functional>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "ido/core/error.h"
+#include "ido/image/filters.h"
+#include "ido/segment/balloon.h"
+#include "ido/segment/organ.h"
+
+namespace ido::segment {
+namespace {
+
+// 350 HU where inside(p), 40 HU elsewhere, blurred by σ = 0.7 mm, with white noise of σ = 15 HU,
+// on a 1-mm grid of @p size voxels (origin 0).
+image::Volume<float> vessel_volume(Index3 size, const std::function<bool(const Vec3&)>& inside) {
+  image::Volume<float> v(size, Vec3(1, 1, 1));
+  for (std::int64_t k = 0; k < size[2]; ++k)
+    for (std::int64_t j = 0; j < size[1]; ++j)
+      for (std::int64_t i = 0; i < size[0]; ++i) v(i, j, k) = inside(Vec3(double(i), double(j), double(k))) ? 350.f : 40.f;
+  v = image::gaussian_smooth(v, 0.7);
+  std::mt19937 rng(3);
+  std::normal_distribution<float> noise(0.f, 15.f);
+  for (float& x : v.data()) x += noise(rng);
+  return v;
+}
+
+double segment_distance(const Vec3& p, const Vec3& a, const Vec3& b) {
+  const Vec3 ab = b - a;
+  const double t = std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
+  return (p - (a + t * ab)).norm();
+}
+
+// A tube of radius 4 mm along z from z = 4 to z = 44 opening into a ball of radius 14 mm centred
+// at z = 58: a vessel leaving a chamber of the same grey level.
+bool tube_and_chamber(const Vec3& p) {
+  return segment_distance(p, Vec3(24, 24, 4), Vec3(24, 24, 46)) <= 4.0 || (p - Vec3(24, 24, 58)).norm() <= 14.0;
+}
+
+TEST(LeakGuard, ClosesAChamberWiderThanTheSeedRegion) {
+  const auto ct = vessel_volume({48, 48, 76}, tube_and_chamber);
+  const image::Volume<float> smoothed = image::gaussian_smooth(ct, 0.7);
+  const IntensityModel model{350, 120};
+  const LeakGuard guard(smoothed, model, {Vec3(24, 24, 16)}, {});
+  ASSERT_TRUE(guard.active());
+  // The seed region's radius is the tube's (4 mm, read between voxel centres, so within a voxel).
+  EXPECT_NEAR(guard.seed_radius_mm(), 4.0, 1.0);
+  EXPECT_NEAR(guard.chamber_radius_mm(), 2.5 * guard.seed_radius_mm(), 1e-9);
+  EXPECT_EQ(guard.cause_at(Vec3(24, 24, 58)), LeakCause::Chamber);  // the chamber's centre
+  EXPECT_EQ(guard.cause_at(Vec3(24, 24, 68)), LeakCause::Chamber);  // its far side
+  EXPECT_EQ(guard.cause_at(Vec3(24, 24, 30)), LeakCause::None);     // the tube
+  EXPECT_EQ(guard.cause_at(Vec3(24, 24, 16)), LeakCause::None);     // the seed
+  // Off: nothing closed.
+  LeakControlOptions off;
+  off.enabled = false;
+  EXPECT_FALSE(LeakGuard(smoothed, model, {Vec3(24, 24, 16)}, off).active());
+}
+
+TEST(LeakGuard, TheBalloonStopsAtTheNeckAndReportsIt) {
+  const auto ct = vessel_volume({48, 48, 76}, tube_and_chamber);
+  BalloonOptions o;
+  o.reference = 350;
+  o.tolerance = 120;
+  const BalloonResult guarded = segment_balloon(ct, {Vec3(24, 24, 16)}, o);
+  o.leak.enabled = false;
+  const BalloonResult flooded = segment_balloon(ct, {Vec3(24, 24, 16)}, o);
+  const double tube = kPi * 16.0 * 42.0, chamber = 4.0 / 3.0 * kPi * 14.0 * 14.0 * 14.0;
+  // Without the guard the balloon fills the chamber; with it, the tube and at most a cap of it.
+  EXPECT_GT(flooded.report.volume_mm3, tube + 0.8 * chamber);
+  EXPECT_LT(guarded.report.volume_mm3, tube + 0.15 * chamber);
+  EXPECT_GT(guarded.report.volume_mm3, 0.8 * tube);
+  EXPECT_TRUE(guarded.report.closed && guarded.report.manifold);
+  ASSERT_FALSE(guarded.report.leaks.empty());
+  const LeakEvent& e = guarded.report.leaks.front();
+  EXPECT_EQ(e.cause, LeakCause::Chamber);
+  // Where the tube meets the chamber (z ≈ 44), not far inside either.
+  EXPECT_NEAR(e.position_mm.z(), 44.0, 8.0);
+  EXPECT_GT(e.neck_radius_mm, 1.0);
+  EXPECT_TRUE(flooded.report.leaks.empty());
+}
+
+TEST(LeakGuard, AStopPointClosesTheVesselBeyondIt) {
+  const auto ct = vessel_volume({40, 40, 80}, [](const Vec3& p) { return segment_distance(p, Vec3(20, 20, 4), Vec3(20, 20, 76)) <= 5.0; });
+  BalloonOptions o;
+  o.reference = 350;
+  o.tolerance = 120;
+  o.leak.stop_points_mm = {Vec3(20, 20, 50)};
+  const BalloonResult r = segment_balloon(ct, {Vec3(20, 20, 20)}, o);
+  double zmax = -INFINITY;
+  for (const Vec3& v : r.surface.vertices) zmax = std::max(zmax, v.z());
+  // The ball closed around the stop point has 1.5 × the local radius (5 mm): the front halts before it.
+  EXPECT_LT(zmax, 50.0 - 5.0);
+  EXPECT_GT(zmax, 50.0 - 12.0);
+  ASSERT_FALSE(r.report.leaks.empty());
+  EXPECT_EQ(r.report.leaks.front().cause, LeakCause::StopPoint);
+}
+
+TEST(LeakGuard, MaxRadiusClosesWhereAWiderBallFits) {
+  const auto ct = vessel_volume({48, 48, 76}, tube_and_chamber);
+  const image::Volume<float> smoothed = image::gaussian_smooth(ct, 0.7);
+  LeakControlOptions o;
+  o.chamber_factor = 0;
+  o.max_radius_mm = 8.0;
+  const LeakGuard guard(smoothed, {350, 120}, {Vec3(24, 24, 16)}, o);
+  EXPECT_EQ(guard.cause_at(Vec3(24, 24, 58)), LeakCause::Chamber);
+  EXPECT_EQ(guard.cause_at(Vec3(24, 24, 30)), LeakCause::None);
+}
+
+TEST(LeakGuard, RejectsBadOptions) {
+  const auto ct = vessel_volume({16, 16, 16}, [](const Vec3& p) { return (p - Vec3(8, 8, 8)).norm() < 5; });
+  LeakControlOptions o;
+  o.chamber_factor = 0.5;
+  EXPECT_THROW(LeakGuard(ct, {350, 100}, {Vec3(8, 8, 8)}, o), InvalidInput);
+  o = {};
+  o.max_radius_mm = -1;
+  EXPECT_THROW(LeakGuard(ct, {350, 100}, {Vec3(8, 8, 8)}, o), InvalidInput);
+  o = {};
+  o.stop_points_mm = {Vec3(100, 0, 0)};
+  EXPECT_THROW(LeakGuard(ct, {350, 100}, {Vec3(8, 8, 8)}, o), InvalidInput);
+}
+
+TEST(Organ, NamesRoundTripAndUnknownIsRejected) {
+  for (Organ o : {Organ::Generic, Organ::Artery, Organ::Vein, Organ::Vertebra}) EXPECT_EQ(parse_organ(organ_name(o)), o);
+  EXPECT_THROW((void)parse_organ("liver"), InvalidInput);
+  EXPECT_TRUE(organ_options(Organ::Vertebra).accept_brighter);
+  EXPECT_TRUE(organ_options(Organ::Vertebra).leak.separate_neighbours);
+  EXPECT_EQ(organ_options(Organ::Artery).outside_level, 40.0);
+}
+
+}  // namespace
+}  // namespace ido::segment
