@@ -652,6 +652,11 @@ Balloon::Balloon(const image::Volume<float>& ct, const std::vector<Vec3>& seeds_
     : m(std::make_unique<State>()) {
   m->start = std::chrono::steady_clock::now();
   if (ct.empty()) throw InvalidInput("balloon: the volume is empty");
+  // The seed's icosphere is two voxels across and the wall needs a voxel beyond it: a thinner grid
+  // holds no closed surface (a 1x1x1 volume inflated without end).
+  if (ct.size(0) < 3 || ct.size(1) < 3 || ct.size(2) < 3)
+    throw InvalidInput("balloon: the volume is " + std::to_string(ct.size(0)) + "x" + std::to_string(ct.size(1)) + "x" +
+                       std::to_string(ct.size(2)) + " voxels; at least 3 along each axis are needed");
   if (seeds_mm.empty()) throw InvalidInput("balloon: at least one seed is needed");
   if (options.tolerance && !(*options.tolerance > 0))
     throw InvalidInput("balloon: the tolerance must be positive");

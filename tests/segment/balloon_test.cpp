@@ -663,6 +663,31 @@ TEST(Balloon, RejectsBadInput) {
     r.edge_reach_voxels = reach;
     EXPECT_THROW(Balloon(ct, {Vec3(5, 5, 5)}, r), InvalidInput) << reach;
   }
+  // A grid too thin to hold a closed surface (a 1x1x1 volume used to inflate without end).
+  EXPECT_THROW(Balloon(image::Volume<float>({1, 1, 1}), {Vec3(0, 0, 0)}), InvalidInput);
+  EXPECT_THROW(Balloon(image::Volume<float>({64, 64, 2}), {Vec3(30, 30, 0)}), InvalidInput);
+  BalloonOptions w;
+  w.max_inflation_work = -1;
+  EXPECT_THROW(Balloon(ct, {Vec3(5, 5, 5)}, w), InvalidInput);
+  w = {};
+  w.max_iterations = 0;
+  EXPECT_THROW(Balloon(ct, {Vec3(5, 5, 5)}, w), InvalidInput);
+}
+
+// The work limit bounds a flood: a seed in a uniform block whose band is the whole grid stops
+// once the inflation has moved that many vertices, with the leak warning and no edge stage.
+TEST(Balloon, WorkLimitStopsAFloodAndSaysSo) {
+  image::Volume<float> ct({60, 60, 60}, Vec3(1, 1, 1), Vec3::Zero(), Mat3::Identity(), 100.0f);
+  BalloonOptions o;
+  o.reference = 100;
+  o.tolerance = 20;
+  o.max_inflation_work = 20000;
+  const BalloonResult r = segment_balloon(ct, {Vec3(30, 30, 30)}, o);
+  EXPECT_EQ(r.report.stop_reason, "work_limit");
+  EXPECT_TRUE(r.report.leak_warning);
+  EXPECT_GT(r.report.inflation_vertex_steps, 20000);
+  EXPECT_EQ(r.report.edge_profile_searches, 0);
+  EXPECT_TRUE(r.report.closed && r.report.manifold);
 }
 
 }  // namespace

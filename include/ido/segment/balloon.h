@@ -184,7 +184,7 @@ struct BalloonResult {
 /// The caller may drive it step by step (step()) or call run().
 class Balloon {
  public:
-  /// @throws ido::InvalidInput when the volume is empty, there is no seed, a seed lies
+  /// @throws ido::InvalidInput when the volume is empty or thinner than 3 voxels along an axis, there is no seed, a seed lies
   /// outside the volume, or an option is out of range (tolerance ≤ 0, ...).
   Balloon(const image::Volume<float>& ct, const std::vector<Vec3>& seeds_mm, const BalloonOptions& options = {});
   Balloon(Balloon&&) noexcept;
