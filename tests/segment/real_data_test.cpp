@@ -17,6 +17,7 @@
 #include "ido/io/mesh_io.h"
 #include "ido/io/volume_io.h"
 #include "ido/segment/balloon.h"
+#include "ido/segment/organ.h"
 #include "ido/segment/metrics.h"
 #include "support/test_support.h"
 
@@ -214,6 +215,52 @@ TEST(RealDataSection, VmtkAortaWithinTheReferenceSection) {
   RecordProperty("dice_in_section", std::to_string(s.dice));
   EXPECT_GE(s.dice, 0.93);
   EXPECT_LE(s.hd95_mm, 2.0 * o.voxel_mm);
+}
+
+// abdomen-spine, one seed per vertebra and `--organ vertebra` only (issue 27): the balloon used
+// to take the whole spine and pelvis from any of them (26x L3's volume). Asserted: no case ends
+// with more than 1.5x its reference's volume, and what it takes of other vertebrae stays under a
+// tenth of its own reference (measured: 30-127 voxels for L1-L4, 236 of 2431 for L5 against the
+// sacrum). Dice is printed and held to what it measures today (0.71-0.83, against the issue's
+// 0.90: docs/segmentation.md says where it falls short).
+TEST(RealDataSpine, EachVertebraFromItsSeedAlone) {
+  IDO_REQUIRE_SHARED_DATA();
+  const auto dir = *test::shared_data_dir();
+  const image::Volume<float> ct = io::read_volume(dir / "abdomen-spine/ct.nii.gz");
+  const image::Volume<float> labels = io::read_volume(dir / "abdomen-spine/vertebrae.nii.gz");
+  struct Seed { int label; Index3 voxel; };
+  // L1, L3, L5 from the data README; L2 and L4 the deepest voxel of their labels.
+  for (const Seed& sd : {Seed{31, {56, 36, 97}}, Seed{30, {57, 41, 86}}, Seed{29, {58, 45, 74}}, Seed{28, {56, 46, 61}},
+                         Seed{27, {57, 41, 49}}}) {
+    const Vec3 seed = ct.index_to_world(Vec3(double(sd.voxel[0]), double(sd.voxel[1]), double(sd.voxel[2])));
+    const BalloonResult r = segment_balloon(ct, {seed}, organ_options(Organ::Vertebra));
+    const auto mask = surface_to_mask(r.surface, ct);
+    auto truth = mask.like<std::uint8_t>(0);
+    std::int64_t mine = 0, others = 0, taken_from_others = 0;
+    for (std::size_t i = 0; i < mask.data().size(); ++i) {
+      const int l = int(std::lround(labels.data()[i]));
+      truth.data()[i] = l == sd.label ? 1 : 0;
+      mine += l == sd.label;
+      others += l != 0 && l != sd.label;
+      taken_from_others += mask.data()[i] && l != 0 && l != sd.label;
+    }
+    const SegmentationScores s = compare_masks(mask, truth);
+    std::printf("vertebra %d: dice %.4f volume ratio %.3f, %lld voxels of other vertebrae; %s, %.2f s\n", sd.label, s.dice,
+                s.volume_ratio, static_cast<long long>(taken_from_others), r.report.stop_reason.c_str(), r.report.seconds);
+    EXPECT_TRUE(r.report.closed && r.report.manifold) << sd.label;
+    EXPECT_LE(s.volume_ratio, 1.5) << sd.label;
+    EXPECT_LT(double(taken_from_others), 0.1 * double(mine)) << sd.label;
+    EXPECT_GE(s.dice, 0.60) << sd.label;
+    EXPECT_EQ(r.report.neighbour_markers_mm.size(), 2u) << sd.label;
+    (void)others;
+  }
+}
+
+// `--organ artery` is the lumen configuration that meets ctpa's target (kCtpaLumen).
+TEST(RealDataOrgan, ArteryIsTheLumenConfiguration) {
+  const BalloonOptions a = organ_options(Organ::Artery);
+  EXPECT_EQ(a.edge_reach_voxels, kCtpaLumen.edge_reach);
+  EXPECT_EQ(a.outside_level, kCtpaLumen.outside_level);
 }
 
 }  // namespace
