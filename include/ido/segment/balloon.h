@@ -46,7 +46,7 @@ struct BalloonOptions {
   /// step, BalloonReport::inflation_vertex_steps), which bounds a flood the leak control did not
   /// stop to a few seconds (the shared scans need at most about 1 million). Reaching it raises the
   /// leak warning and skips the edge stage. 0 = no limit.
-  std::int64_t max_inflation_work = 3'000'000;
+  std::int64_t max_inflation_work = 2'000'000;
   /// Optional region of interest (world mm, axis-aligned {min, max}): outside it the
   /// balloon deflates. A user safeguard, not the leak-stopping mechanism.
   std::optional<std::array<Vec3, 2>> roi_mm;
