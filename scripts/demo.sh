@@ -38,6 +38,7 @@ shared="${IDO_SHARED_DATA:-$root/../shared/data}"
 missing=()
 [[ -d "$shared/abdomen-dicom/series" ]] || missing+=("$shared/abdomen-dicom/series (step 4)")
 [[ -f "$shared/ctpa/ct.nii.gz" ]] || missing+=("$shared/ctpa/ct.nii.gz (step 5)")
+[[ -f "$shared/abdomen-spine/ct.nii.gz" ]] || missing+=("$shared/abdomen-spine/ct.nii.gz (step 6)")
 if (( ${#missing[@]} > 0 )); then
   echo "== Real scans not found, so skipped. Looked for:"
   printf '     %s\n' "${missing[@]}"
@@ -52,22 +53,26 @@ fi
 if [[ -d "$shared/abdomen-dicom/series" ]]; then
   echo "== 4. A real scan: the abdominal aorta from the DICOM series in $shared"
   "$ido" info "$shared/abdomen-dicom/series" | head -6
-  # --calcium: the reference counts the calcified wall as aorta; --edge-reach 2: the aorta, not
-  # the branch leaving it, which the reference leaves out (docs/segmentation.md)
-  "$ido" segment "$shared/abdomen-dicom/series" --seed-voxel 263,299,11 --calcium 200 --calcium-reach 3 --edge-reach 2 \
+  # One seed and the organ choice (docs/segmentation.md, "Organ choices")
+  "$ido" segment "$shared/abdomen-dicom/series" --seed-voxel 263,299,11 --organ artery \
     -o real_aorta.stl --mask real_aorta_mask.nii.gz --report real_aorta_report.json
   "$ido" compare --mask real_aorta_mask.nii.gz --truth "$shared/abdomen-dicom/aorta.nii.gz" || true
   "$ido" render real_aorta.stl -o real_aorta.png
 fi
 if [[ -f "$shared/ctpa/ct.nii.gz" ]]; then
   echo "== 5. A real scan: the pulmonary arteries of a CT pulmonary angiogram in $shared"
-  # --edge-reach 2: the arteries the inflation filled, not the distal branches the reference
-  # leaves out; --outside-level 40: the lumen against the soft tissue of the wall, not half-way
-  # to the lung beyond it, as the reference draws it (docs/segmentation.md)
-  "$ido" segment "$shared/ctpa/ct.nii.gz" --seed 33.34,-186.66,693.20 --edge-reach 2 --outside-level 40 \
+  # --organ artery: the lumen, as the reference draws it (docs/segmentation.md, "Organ choices")
+  "$ido" segment "$shared/ctpa/ct.nii.gz" --seed 33.34,-186.66,693.20 --organ artery \
     -o real_pulmonary.stl --mask real_pulmonary_mask.nii.gz --report real_pulmonary_report.json
   "$ido" compare --mask real_pulmonary_mask.nii.gz --truth "$shared/ctpa/pulmonary_artery.nii.gz" || true
   "$ido" render real_pulmonary.stl -o real_pulmonary.png
+fi
+if [[ -f "$shared/abdomen-spine/ct.nii.gz" ]]; then
+  echo "== 6. A real scan: one lumbar vertebra (L3) from one seed, to tetrahedra, in $shared"
+  # The bone balloon takes the vertebra choice: kept apart from L2 and L4 (docs/segmentation.md)
+  "$ido" pipeline "$shared/abdomen-spine/ct.nii.gz" --bone-seed-voxel 58,45,74 \
+    --truth "$shared/abdomen-spine/vertebrae.nii.gz" --bone-label 29 -o real_vertebra
+  grep -E "segment bone|tetrahedral" real_vertebra/summary.md || true
 fi
 
 echo

@@ -39,6 +39,7 @@
 #include "ido/meshing/tetrahedralize.h"
 #include "ido/segment/balloon.h"
 #include "ido/segment/metrics.h"
+#include "ido/segment/organ.h"
 #include "ido/viz/renderer.h"
 
 namespace ido::cli {
@@ -61,6 +62,7 @@ struct Options {
   // --outside-level); the box bounds both organs.
   std::optional<double> vessel_reference, vessel_tolerance, vessel_outside_level;
   double vessel_edge_reach = 0.0;
+  std::string vessel_organ = "generic";
   std::string roi;
   int vessel_label = 1;
   int bone_label = 2;
@@ -342,6 +344,13 @@ void run(const Options& o, const GlobalOptions& g) {
   const auto start = std::chrono::steady_clock::now();
   check_balloon_arguments("--vessel-", o.vessel_reference, o.vessel_tolerance, o.vessel_edge_reach,
                           o.vessel_outside_level);
+  segment::Organ vessel_organ = segment::Organ::Generic;
+  try {
+    vessel_organ = segment::parse_organ(o.vessel_organ);
+  } catch (const InvalidInput& e) {
+    throw InvalidInput(fmt::format("--vessel-{}", e.what()));
+  }
+  if (vessel_organ == segment::Organ::Vertebra) throw InvalidInput("--vessel-organ: vertebra is for --bone-seed, not a vessel");
   std::optional<std::array<Vec3, 2>> roi;
   if (!o.roi.empty()) roi = parse_roi(o.roi);
   const fs::path dir = o.out_dir;
@@ -367,18 +376,19 @@ void run(const Options& o, const GlobalOptions& g) {
   std::vector<Organ> organs;
   auto add_organ = [&](const std::string& name, const std::vector<Vec3>& seeds, bool bone, int label) {
     ido::logger().info("segmenting the {} from {} seed(s)", name, seeds.size());
-    segment::BalloonOptions bo;
-    bo.accept_brighter = bone;
+    // The bone is a vertebra (kept apart from its neighbours); the vessel takes --vessel-organ.
+    segment::BalloonOptions bo = segment::organ_options(bone ? segment::Organ::Vertebra : vessel_organ);
     bo.roi_mm = roi;
     if (!bone) {
       bo.reference = o.vessel_reference;
       bo.tolerance = o.vessel_tolerance;
-      bo.edge_reach_voxels = o.vessel_edge_reach;
-      bo.outside_level = o.vessel_outside_level;
+      if (o.vessel_edge_reach > 0) bo.edge_reach_voxels = o.vessel_edge_reach;
+      if (o.vessel_outside_level) bo.outside_level = o.vessel_outside_level;
     }
     organs.push_back(segment_organ(name, ct, seeds, bo, dir, progress.get()));
     json entry;
-    entry["options"] = {{"edge_reach_voxels", bo.edge_reach_voxels},
+    entry["options"] = {{"organ", bone ? "vertebra" : o.vessel_organ},
+                        {"edge_reach_voxels", bo.edge_reach_voxels},
                         {"outside_level", bo.outside_level ? json(*bo.outside_level) : json(nullptr)},
                         {"roi_mm", roi ? json::array({{(*roi)[0].x(), (*roi)[0].y(), (*roi)[0].z()},
                                                       {(*roi)[1].x(), (*roi)[1].y(), (*roi)[1].z()}})
@@ -472,6 +482,9 @@ void setup(CLI::App& app, const GlobalOptions& g) {
   sub->add_option("--vessel-reference", opts->vessel_reference,
                   "Vessel grey level (e.g. HU), with --vessel-tolerance; estimated at the seeds if omitted");
   sub->add_option("--vessel-tolerance", opts->vessel_tolerance, "Accepted departure from --vessel-reference");
+  sub->add_option("--vessel-organ", opts->vessel_organ,
+                  "the vessel's organ choice: generic (default), artery or vein (ido segment --organ); the bone "
+                  "balloon always takes the vertebra choice");
   sub->add_option("--vessel-edge-reach", opts->vessel_edge_reach,
                   "As `ido segment --edge-reach` for the vessel: voxels the final snap may move the surface; 0 = no "
                   "limit (default)");

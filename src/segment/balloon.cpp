@@ -702,7 +702,7 @@ Balloon::Balloon(const image::Volume<float>& ct, const std::vector<Vec3>& seeds_
   // Bone reads its edge stop along the normal from the smoothed image; only vessels need |∇I|.
   if (options.edge_stop > 0 && !options.accept_brighter)
     m->gradient_mm = image::gradient_magnitude(m->smoothed, options.threaded);
-  if (options.edge_refinement && options.plateau_wall) {
+  if (options.edge_refinement && options.plateau_wall && ct.spacing().maxCoeff() <= options.plateau_wall_max_voxel_mm) {
     State& st = *m;
     const double h = st.h, search = options.edge_search_voxels * h;
     // Along grid axis a a voxel of size s_a adds the scanner's blur (scanner_blur_voxels · s_a),

@@ -28,10 +28,10 @@ BalloonOptions organ_options(Organ organ, BalloonOptions o) {
       // The lumen: the wall half-way to soft tissue, not to lung or fat beyond a thin wall, and
       // the final snap kept to the vessel the inflation filled (docs/segmentation.md).
       o.outside_level = 40.0;
-      // At the scan resolutions where vertebrae touch (2–3 mm), the cortex is a voxel or less:
-      // the half-way level fits the reference better than the three-plateau wall, which puts
-      // it about a voxel outward there (measured: docs/segmentation.md).
-      o.plateau_wall = false;
+      // At 2–3 mm voxels the cortex is a voxel or less: the half-way level fits the reference
+      // better than the three-plateau wall, which puts it about a voxel outward there; at 1 mm
+      // the plateau fit finds the cortex's outer edge (measured: docs/segmentation.md).
+      o.plateau_wall_max_voxel_mm = 1.5;
       o.edge_reach_voxels = 2.0;
       if (organ == Organ::Vein) o.leak.chamber_factor = 2.0;
       break;
@@ -39,10 +39,10 @@ BalloonOptions organ_options(Organ organ, BalloonOptions o) {
       o.accept_brighter = true;
       // The band reaches at most half-way from the marrow down to soft tissue (CT, HU).
       o.outside_level = 40.0;
-      // At the scan resolutions where vertebrae touch (2–3 mm), the cortex is a voxel or less:
-      // the half-way level fits the reference better than the three-plateau wall, which puts
-      // it about a voxel outward there (measured: docs/segmentation.md).
-      o.plateau_wall = false;
+      // At 2–3 mm voxels the cortex is a voxel or less: the half-way level fits the reference
+      // better than the three-plateau wall, which puts it about a voxel outward there; at 1 mm
+      // the plateau fit finds the cortex's outer edge (measured: docs/segmentation.md).
+      o.plateau_wall_max_voxel_mm = 1.5;
       o.leak.separate_neighbours = true;
       break;
     case Organ::Generic: break;

@@ -86,6 +86,9 @@ TEST(PipelineCli, SpineAortaEndToEnd) {
   EXPECT_EQ(report["segmentation"]["vessel"]["options"]["edge_reach_voxels"].get<double>(), 2.0);
   EXPECT_EQ(report["segmentation"]["bone"]["options"]["edge_reach_voxels"].get<double>(), 0.0);
   EXPECT_TRUE(report["segmentation"]["vessel"]["options"]["outside_level"].is_null());
+  // The bone's balloon takes the vertebra choice (kept apart from neighbours; none here).
+  EXPECT_EQ(report["segmentation"]["bone"]["options"]["organ"], "vertebra");
+  EXPECT_EQ(report["segmentation"]["vessel"]["options"]["organ"], "generic");
   // The vertebra too, posterior arch included: the ring around the canal makes it genus 1.
   EXPECT_GE(report["segmentation"]["bone"]["scores"]["dice"].get<double>(), 0.97);
   EXPECT_EQ(report["segmentation"]["bone"]["balloon"]["euler_characteristic"].get<int>(), 0);
@@ -132,6 +135,8 @@ TEST(PipelineCli, BadInputExitsTwoAndWritesNoReport) {
                                     {"--vessel-reference 300 --vessel-tolerance -5", "--vessel-tolerance"},
                                     {"--vessel-edge-reach -1", "--vessel-edge-reach"},
                                     {"--vessel-outside-level nan", "--vessel-outside-level"},
+                                    {"--vessel-organ liver", "--vessel-organ"},
+                                    {"--vessel-organ vertebra", "--vessel-organ"},
                                     {"--roi 0,0,0,10,10", "--roi"},
                                     {"--roi 0,0,0,-10,10,10", "--roi"}}) {
     r = test::run_tool(fmt::format("pipeline {} --seed {} {} -o {}", in.ct.string(), seed_arg(in.vessel_seed), args,

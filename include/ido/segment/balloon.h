@@ -110,6 +110,10 @@ struct BalloonOptions {
   /// (variance s_a² / 12) and the trilinear sampling (≈ s_a² / 6), s_a the spacing. The half-way level between the profile's extremes
   /// puts a 1.5-mm cortex's wall about half a voxel outward (measured: docs/segmentation.md).
   bool plateau_wall = true;
+  /// The thin-layer wall model needs a cortex the grid resolves: with a voxel larger than this
+  /// (mm, its largest spacing) the half-way level is used instead (a 2–3 mm spine scan's cortex
+  /// is a voxel or less, and the fit put the wall about a voxel outward there).
+  double plateau_wall_max_voxel_mm = INFINITY;
   /// Active front while inflating (a narrow band on the surface, as a sparse-field level set
   /// updates only the band near its front): a vertex that moved less than sleep_move_voxels
   /// (× h) in each of the last sleep_steps steps, and none of whose one-ring neighbours moved
