@@ -14,6 +14,7 @@
 #include "ido/meshing/signed_distance.h"
 #include "ido/segment/balloon.h"
 #include "ido/segment/metrics.h"
+#include "ido/segment/organ.h"
 #include "ido/segment/phantom.h"
 
 namespace ido::segment {
@@ -207,6 +208,55 @@ INSTANTIATE_TEST_SUITE_P(AllKinds, PhantomAccuracy, ::testing::ValuesIn(all_case
                              if (ch == '-') ch = '_';
                            return n + (param_info.param.anisotropic ? "_aniso" : "_iso");
                          });
+
+// The leak phantoms at the accuracy suite's noise (20 % of the contrast) and blur (0.7 voxel),
+// draw 1, one seed, the organ choice only: with leak control and without.
+struct PhantomRun {
+  SegmentationScores guarded, flooded;
+  BalloonReport report;
+};
+PhantomRun run_phantom(PhantomKind kind, Organ organ) {
+  PhantomOptions po;
+  po.blur_voxels = 0.7;
+  po.noise_hu = 0.2 * make_phantom(kind).contrast_hu;
+  const Phantom ph = make_phantom(kind, po);
+  BalloonOptions o = organ_options(organ);
+  const BalloonResult with = segment_balloon(ph.ct_hu, {ph.seeds_mm.front()}, o);
+  o.leak.enabled = false;
+  const BalloonResult without = segment_balloon(ph.ct_hu, {ph.seeds_mm.front()}, o);
+  return {compare_masks(surface_to_mask(with.surface, ph.ct_hu), ph.labels),
+          compare_masks(surface_to_mask(without.surface, ph.ct_hu), ph.labels), with.report};
+}
+
+TEST(LeakPhantoms, ValveChamberStopsAtTheValve) {
+  const PhantomRun r = run_phantom(PhantomKind::ValveChamber, Organ::Generic);
+  EXPECT_GT(r.flooded.volume_ratio, 5.0);  // without the guard: the chamber (measured 20x)
+  EXPECT_GE(r.guarded.dice, 0.95);         // measured 0.981
+  EXPECT_EQ(r.report.euler_characteristic, 2);
+  ASSERT_FALSE(r.report.leaks.empty());
+  EXPECT_EQ(r.report.leaks.front().cause, LeakCause::Chamber);
+}
+
+TEST(LeakPhantoms, VertebraStackKeepsTheSeededVertebra) {
+  const PhantomRun r = run_phantom(PhantomKind::VertebraStack, Organ::Vertebra);
+  EXPECT_GT(r.flooded.volume_ratio, 2.0);  // without: all three (measured 3.45)
+  EXPECT_GE(r.guarded.dice, 0.92);         // measured 0.937 (the discs' blurred rims are the excess)
+  EXPECT_LT(r.guarded.volume_ratio, 1.2);
+  EXPECT_TRUE(r.report.closed && r.report.manifold);
+  // The truth's Euler number is 0 (the ring around the canal); the surface has −2 at this draw,
+  // a second handle where a facet plate meets the arch: a known miss (docs/segmentation.md), not
+  // asserted here.
+  EXPECT_EQ(r.report.neighbour_markers_mm.size(), 2u);
+}
+
+TEST(LeakPhantoms, VeinInParenchymaDoesNotFloodTheLiver) {
+  const PhantomRun r = run_phantom(PhantomKind::VeinInParenchyma, Organ::Generic);
+  EXPECT_GT(r.flooded.volume_ratio, 5.0);  // without: the liver (measured 8.4x)
+  // With: no flood, but the guard also closes the vein where the liver wraps it (measured Dice
+  // 0.81, volume ratio 0.70): a known shortfall, docs/segmentation.md.
+  EXPECT_LT(r.guarded.volume_ratio, 1.0);
+  EXPECT_GE(r.guarded.dice, 0.75);
+}
 
 }  // namespace
 }  // namespace ido::segment
