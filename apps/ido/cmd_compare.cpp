@@ -54,9 +54,17 @@ void run(const CompareOptions& o) {
   if (o.truth_below && !std::isfinite(*o.truth_below))
     throw InvalidInput(fmt::format("--truth-below must be a finite number, got {}", *o.truth_below));
   const auto truth = o.truth_below ? read_level_set_mask(o.truth, *o.truth_below) : read_mask(o.truth, o.label);
+  // The mesh's own problems (an open surface) are named with its file.
+  auto mesh_scores = [&] {
+    const geometry::TriangleMesh mesh = io::read_triangle_mesh(o.mesh);
+    try {
+      return segment::compare_mesh_to_mask(mesh, truth);
+    } catch (const InvalidInput& e) {
+      throw InvalidInput(fmt::format("{}: {}", o.mesh, e.what()));
+    }
+  };
   const segment::SegmentationScores s =
-      o.mask.empty() ? segment::compare_mesh_to_mask(io::read_triangle_mesh(o.mesh), truth)
-                     : segment::compare_masks(read_mask(o.mask, o.label), truth);
+      o.mask.empty() ? mesh_scores() : segment::compare_masks(read_mask(o.mask, o.label), truth);
   if (o.json) {
     const nlohmann::json j = {{"mask", o.mask.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.mask)},
                               {"mesh", o.mesh.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.mesh)},

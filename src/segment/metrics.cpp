@@ -12,6 +12,7 @@
 
 #include "ido/core/error.h"
 #include "ido/core/parallel.h"
+#include "ido/geometry/mesh_checks.h"
 #include "ido/geometry/predicates.h"
 
 namespace ido::segment {
@@ -365,6 +366,12 @@ SegmentationScores compare_masks(const image::Volume<std::uint8_t>& mask_in, con
 
 SegmentationScores compare_mesh_to_mask(const geometry::TriangleMesh& mesh, const image::Volume<std::uint8_t>& truth) {
   require_nonempty(truth, "truth");
+  // Only a closed surface has an inside: an open one rasterised to nothing (Dice 0, HD inf).
+  const geometry::MeshCheckReport check = geometry::check_mesh(mesh);
+  if (!check.closed)
+    throw InvalidInput(check.triangles == 0 ? std::string("the surface has no triangles")
+                                            : "the surface is not closed (" + std::to_string(check.boundary_edges) +
+                                                  " boundary edges): only a closed surface has an inside to score");
   return compare_masks(rasterize_mesh(mesh, truth), truth);
 }
 

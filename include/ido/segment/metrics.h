@@ -58,7 +58,8 @@ template <class T>
 }
 
 /// Scores a closed surface against a truth mask: the mesh is rasterised onto the truth's
-/// grid, then compare_masks. @throws ido::InvalidInput for an empty truth or a bad mesh.
+/// grid, then compare_masks. @throws ido::InvalidInput for an empty truth, a bad mesh, or a
+/// surface that is not closed (boundary edges: it has no inside).
 [[nodiscard]] SegmentationScores compare_mesh_to_mask(const geometry::TriangleMesh& closed_mesh,
                                                       const image::Volume<std::uint8_t>& truth);
 
