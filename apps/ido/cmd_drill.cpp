@@ -163,7 +163,7 @@ void run(const DrillOptions& o, const GlobalOptions& g) {
     // The render consumer hands over copies of its v_lists at the picture times; they are
     // rendered once the session is over, so rendering never competes with the session.
     if (!o.snapshots.empty()) {
-      sim.set_surface_snapshots([&shots](double t, const auto& lists) { shots.emplace_back(t, lists); },
+      sim.set_surface_snapshots([&shots](double t, const auto& shown) { shots.emplace_back(t, shown); },
                                 o.snapshot_every_s, device.duration());
     }
     {
