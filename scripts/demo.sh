@@ -72,7 +72,7 @@ if [[ -f "$shared/abdomen-spine/ct.nii.gz" ]]; then
   # The bone balloon takes the vertebra choice: kept apart from L2 and L4 (docs/segmentation.md)
   "$ido" pipeline "$shared/abdomen-spine/ct.nii.gz" --bone-seed-voxel 58,45,74 \
     --truth "$shared/abdomen-spine/vertebrae.nii.gz" --bone-label 29 -o real_vertebra
-  grep -E "segment bone|tetrahedral" real_vertebra/summary.md || true
+  grep -E "^\| (segment bone|tetrahedral mesh)" real_vertebra/summary.md || true
 fi
 
 echo
