@@ -146,6 +146,14 @@ std::array<Vec3, 2> parse_roi(const std::string& text) {
   return {a, b};
 }
 
+segment::Organ parse_organ_option(const std::string& name, std::string_view option) {
+  try {
+    return segment::parse_organ(name);
+  } catch (const InvalidInput& e) {
+    throw InvalidInput(fmt::format("{}: {}", option, e.what()));
+  }
+}
+
 void check_balloon_arguments(std::string_view prefix, const std::optional<double>& reference,
                              const std::optional<double>& tolerance, double edge_reach_voxels,
                              const std::optional<double>& outside_level) {

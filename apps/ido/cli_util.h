@@ -11,6 +11,7 @@
 
 #include "ido/core/math.h"
 #include "ido/core/progress.h"
+#include "ido/segment/organ.h"
 
 namespace ido::cli {
 
@@ -24,6 +25,10 @@ Index3 parse_index3(std::string_view text, std::string_view what);
 /// Parses "x0,y0,z0,x1,y1,z1" (world mm) into a box's corners, naming --roi in errors.
 /// @throws ido::InvalidInput on anything but six numbers with each minimum below its maximum.
 std::array<Vec3, 2> parse_roi(const std::string& text);
+
+/// The organ named by option @p option's value @p name (segment::parse_organ).
+/// @throws ido::InvalidInput naming the option and the choices.
+segment::Organ parse_organ_option(const std::string& name, std::string_view option);
 
 /// Checks the balloon's arguments as a command gives them, naming each option with @p prefix
 /// ("--" for `ido segment`, "--vessel-" for `ido pipeline`): reference and tolerance given

@@ -344,12 +344,7 @@ void run(const Options& o, const GlobalOptions& g) {
   const auto start = std::chrono::steady_clock::now();
   check_balloon_arguments("--vessel-", o.vessel_reference, o.vessel_tolerance, o.vessel_edge_reach,
                           o.vessel_outside_level);
-  segment::Organ vessel_organ = segment::Organ::Generic;
-  try {
-    vessel_organ = segment::parse_organ(o.vessel_organ);
-  } catch (const InvalidInput& e) {
-    throw InvalidInput(fmt::format("--vessel-{}", e.what()));
-  }
+  const segment::Organ vessel_organ = parse_organ_option(o.vessel_organ, "--vessel-organ");
   if (vessel_organ == segment::Organ::Vertebra) throw InvalidInput("--vessel-organ: vertebra is for --bone-seed, not a vessel");
   std::optional<std::array<Vec3, 2>> roi;
   if (!o.roi.empty()) roi = parse_roi(o.roi);

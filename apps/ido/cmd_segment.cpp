@@ -156,12 +156,7 @@ nlohmann::json leak_control_json(const segment::BalloonReport& rep) {
 void run(const SegmentCliOptions& o, const GlobalOptions& g) {
   if (o.seeds.empty() && o.seed_voxels.empty()) throw InvalidInput("give at least one --seed X,Y,Z or --seed-voxel I,J,K");
   check_balloon_arguments("--", o.reference, o.tolerance, o.edge_reach_voxels, o.outside_level);
-  segment::Organ organ = segment::Organ::Generic;
-  try {
-    organ = segment::parse_organ(o.organ);
-  } catch (const InvalidInput& e) {
-    throw InvalidInput(fmt::format("--{}", e.what()));
-  }
+  const segment::Organ organ = parse_organ_option(o.organ, "--organ");
   if (o.max_iterations < 1) throw InvalidInput(fmt::format("--max-iterations must be at least 1, got {}", o.max_iterations));
   if (o.calcium && !std::isfinite(*o.calcium)) throw InvalidInput("--calcium must be a finite intensity");
   if (!(o.calcium_reach_mm > 0) || !std::isfinite(o.calcium_reach_mm))

@@ -96,4 +96,37 @@ TEST(SegmentCli, WhiteNoiseFlagNarrowsTheBandToTheNoise) {
   EXPECT_TRUE(test::rel_near(white, 2.5 * noise, 0.12)) << white;
 }
 
+// The organ choice and the leak events on the command line: the valve-chamber phantom with
+// `--organ artery` stops at the valve, prints one line per leak stopped and records the events;
+// a bad organ or iteration count exits 2 naming the option, before anything is written.
+TEST(SegmentCli, OrganChoiceAndLeakEvents) {
+  const auto dir = test::scratch_dir("segment_cli_organ");
+  const auto ct = dir / "ct.nii.gz";
+  auto r = test::run_tool("phantom valve-chamber -o " + ct.string() + " --noise-fraction 0.2 --blur 0.7 --json-seeds");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto facts = nlohmann::json::parse(r.out);
+  const auto& w = facts["seeds"][0]["world_mm"];
+  const std::string seed = std::to_string(w[0].get<double>()) + "," + std::to_string(w[1].get<double>()) + "," +
+                           std::to_string(w[2].get<double>());
+  const auto base = "segment " + ct.string() + " --seed " + seed + " -o " + (dir / "s.ply").string();
+  r = test::run_tool(base + " --organ artery --report " + (dir / "r.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("leak stopped (chamber) at"), std::string::npos) << r.out;
+  std::ifstream in(dir / "r.json");
+  const auto report = nlohmann::json::parse(in);
+  EXPECT_EQ(report["organ"], "artery");
+  EXPECT_EQ(report["outside_level"].get<double>(), 40.0);
+  ASSERT_FALSE(report["leak_control"]["events"].empty());
+  EXPECT_EQ(report["leak_control"]["events"][0]["cause"], "chamber");
+  EXPECT_GT(report["leak_control"]["seed_radius_mm"].get<double>(), 3.0);
+  for (const auto& [args, named] : {std::pair<std::string, std::string>{" --organ liver", "--organ"},
+                                    {" --max-iterations -1", "--max-iterations"}}) {
+    const auto none = dir / "none.ply";
+    r = test::run_tool("segment " + ct.string() + " --seed " + seed + " -o " + none.string() + args);
+    EXPECT_EQ(r.exit_code, 2) << args;
+    EXPECT_NE(r.err.find(named), std::string::npos) << args << ": " << r.err;
+    EXPECT_FALSE(std::filesystem::exists(none)) << args;
+  }
+}
+
 }  // namespace ido::segment
