@@ -47,7 +47,7 @@ std::optional<std::size_t> voxel_of(const image::Volume<float>& v, const Grid& g
   const Vec3 idx = v.world_to_index(p);
   const auto i = std::int64_t(std::lround(idx[0])), j = std::int64_t(std::lround(idx[1])),
              k = std::int64_t(std::lround(idx[2]));
-  if (!g.inside(i, j, k)) return std::nullopt;
+  if (!v.contains(i, j, k)) return std::nullopt;
   return g.at(i, j, k);
 }
 
@@ -355,8 +355,7 @@ LeakCause LeakGuard::cause_at(const Vec3& p_mm) const noexcept {
   const Vec3 idx = m_closed.world_to_index(p_mm);
   const auto i = std::int64_t(std::lround(idx[0])), j = std::int64_t(std::lround(idx[1])),
              k = std::int64_t(std::lround(idx[2]));
-  const Index3& s = m_closed.size();
-  if (!(i >= 0 && j >= 0 && k >= 0 && i < s[0] && j < s[1] && k < s[2])) return LeakCause::None;
+  if (!m_closed.contains(i, j, k)) return LeakCause::None;
   return LeakCause(m_closed(i, j, k));
 }
 
