@@ -14,6 +14,7 @@
 #endif
 
 #include "ido/core/error.h"
+#include "ido/core/statistics.h"
 
 namespace ido::drill {
 namespace {
@@ -53,15 +54,11 @@ Percentiles percentiles(std::vector<double> v) {
   Percentiles p;
   p.count = v.size();
   if (v.empty()) return p;
-  std::sort(v.begin(), v.end());
-  auto rank = [&](double q) {
-    const auto i = static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size()))) ;
-    return v[std::min(v.size() - 1, i == 0 ? 0 : i - 1)];
-  };
-  p.p50 = rank(0.5);
-  p.p99 = rank(0.99);
-  p.p999 = rank(0.999);
-  p.max = v.back();
+  const std::vector<double> q = ido::percentiles(std::move(v), {0.5, 0.99, 0.999, 1.0});
+  p.p50 = q[0];
+  p.p99 = q[1];
+  p.p999 = q[2];
+  p.max = q[3];
   return p;
 }
 

@@ -10,6 +10,7 @@
 
 #include "ido/core/error.h"
 #include "ido/core/parallel.h"
+#include "ido/core/statistics.h"
 
 namespace ido::image {
 namespace {
@@ -190,17 +191,6 @@ Volume<Vec3f> gradient(const Volume<float>& volume, bool threaded) {
 Volume<float> gradient_magnitude(const Volume<float>& volume, bool threaded) {
   return gradient_impl<float>(volume, threaded, 0.f,
                               [](const Vec3& g) { return static_cast<float>(g.norm()); });
-}
-
-double median(std::vector<double> values) {
-  if (values.empty()) throw InvalidInput("median of an empty sample");
-  const std::size_t n = values.size();
-  const auto mid = values.begin() + static_cast<std::ptrdiff_t>(n / 2);
-  std::nth_element(values.begin(), mid, values.end());
-  const double upper = *mid;
-  if (n % 2 == 1) return upper;
-  const double lower = *std::max_element(values.begin(), mid);
-  return 0.5 * (lower + upper);
 }
 
 RobustStats robust_stats(std::vector<double> values) {

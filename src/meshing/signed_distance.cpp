@@ -15,6 +15,7 @@
 #include "ido/geometry/mesh_topology.h"
 #include "ido/geometry/predicates.h"
 #include "ido/geometry/winding_number.h"
+#include "ido/meshing/voxelize.h"
 
 namespace ido::meshing {
 
@@ -28,99 +29,6 @@ bool closed_and_oriented(const geometry::TriangleMesh& m) {
   return std::all_of(map.edges.begin(), map.edges.end(), [](const geometry::EdgeInfo& e) {
     return e.forward == 1 && e.backward == 1 && e.vertices[0] != e.vertices[1];
   });
-}
-
-// Sign of orient2d(a, b, p) with p moved to p + (ε, ε²), ε → 0⁺ (a symbolic perturbation):
-// never 0 unless a = b. Reversing the edge flips it, so of two triangles sharing an edge the
-// moved point lies in exactly one when it lies on that edge's line between them.
-int perturbed_side(const Vec2& a, const Vec2& b, const Vec2& p) {
-  const int s = geometry::sign_of(geometry::orient2d(a, b, p));
-  if (s != 0) return s;
-  // d/dε of (b − a) × (p − a) is −(b − a).y, then +(b − a).x for ε²; the sign of a
-  // difference of two doubles is exact.
-  if (const double dy = b.y() - a.y(); dy != 0) return dy > 0 ? -1 : 1;
-  return geometry::sign_of(b.x() - a.x());
-}
-
-// Inside flags by exact crossing parity along the grid's i rows: each triangle adds ±1 to
-// the winding of the row points beyond where it crosses the row (in index space, so any
-// direction matrix works). Parallel over k-slabs; each row belongs to one slab.
-void mark_inside_by_crossings(const geometry::TriangleMesh& surface, const image::Volume<float>& grid,
-                              std::vector<float>& dist, bool threaded) {
-  const Index3 n = grid.size();
-  std::vector<Vec3> q(surface.vertices.size());
-  for (std::size_t v = 0; v < q.size(); ++v) q[v] = grid.world_to_index(surface.vertices[v]);
-  // An index map that reflects space turns outward normals inward.
-  const int handed = grid.world_to_index_matrix().determinant() > 0 ? 1 : -1;
-  struct Rows { std::int64_t j0, j1, k0, k1; };
-  std::vector<Rows> rows(surface.triangles.size());
-  const std::int64_t slab = 4;
-  const std::int64_t nslabs = (n[2] + slab - 1) / slab;
-  std::vector<std::vector<std::int32_t>> per_slab(static_cast<std::size_t>(nslabs));
-  for (std::size_t t = 0; t < surface.triangles.size(); ++t) {
-    const Tri& tr = surface.triangles[t];
-    const Vec3 lo = q[tr[0]].cwiseMin(q[tr[1]]).cwiseMin(q[tr[2]]);
-    const Vec3 hi = q[tr[0]].cwiseMax(q[tr[1]]).cwiseMax(q[tr[2]]);
-    Rows& r = rows[t];
-    r.j0 = std::max<std::int64_t>(0, std::int64_t(std::ceil(lo[1])));
-    r.j1 = std::min<std::int64_t>(n[1] - 1, std::int64_t(std::floor(hi[1])));
-    r.k0 = std::max<std::int64_t>(0, std::int64_t(std::ceil(lo[2])));
-    r.k1 = std::min<std::int64_t>(n[2] - 1, std::int64_t(std::floor(hi[2])));
-    if (r.j0 > r.j1 || r.k0 > r.k1) continue;
-    for (std::int64_t s = r.k0 / slab; s <= r.k1 / slab; ++s) per_slab[std::size_t(s)].push_back(std::int32_t(t));
-  }
-  struct Crossing {
-    std::int64_t row;  // j + n1 · k
-    double i;          // where the triangle meets the row (index units)
-    int step;          // ±1
-  };
-  parallel_for(
-      static_cast<std::size_t>(nslabs),
-      [&](std::size_t s) {
-        const std::int64_t k0 = std::int64_t(s) * slab, k1 = std::min(n[2], k0 + slab);
-        std::vector<Crossing> crossings;
-        for (const std::int32_t t : per_slab[s]) {
-          const Tri& tr = surface.triangles[std::size_t(t)];
-          const Vec3 &a = q[tr[0]], &b = q[tr[1]], &c = q[tr[2]];
-          const Vec2 a2(a[1], a[2]), b2(b[1], b[2]), c2(c[1], c[2]);
-          const int facing = geometry::sign_of(geometry::orient2d(a2, b2, c2));
-          if (facing == 0) continue;  // seen edge-on: the moved row never meets it
-          const Rows& r = rows[std::size_t(t)];
-          for (std::int64_t k = std::max(k0, r.k0); k <= std::min(k1 - 1, r.k1); ++k)
-            for (std::int64_t j = r.j0; j <= r.j1; ++j) {
-              const Vec2 p{double(j), double(k)};
-              if (perturbed_side(a2, b2, p) != facing || perturbed_side(b2, c2, p) != facing ||
-                  perturbed_side(c2, a2, p) != facing)
-                continue;
-              // Barycentric weights from the (approximate) sub-areas, for the position only.
-              const double wa = std::abs(geometry::orient2d(b2, c2, p)), wb = std::abs(geometry::orient2d(c2, a2, p)),
-                           wc = std::abs(geometry::orient2d(a2, b2, p));
-              const double sum = wa + wb + wc;
-              const double at = sum > 0 ? (wa * a[0] + wb * b[0] + wc * c[0]) / sum : (a[0] + b[0] + c[0]) / 3.0;
-              // A normal with a positive i component leaves the inside along +i.
-              crossings.push_back({j + n[1] * k, at, -facing * handed});
-            }
-        }
-        std::sort(crossings.begin(), crossings.end(), [](const Crossing& x, const Crossing& y) {
-          return x.row != y.row ? x.row < y.row : x.i < y.i;
-        });
-        for (std::size_t first = 0; first < crossings.size();) {
-          std::size_t last = first;
-          while (last < crossings.size() && crossings[last].row == crossings[first].row) ++last;
-          const std::int64_t j = crossings[first].row % n[1], k = crossings[first].row / n[1];
-          int winding = 0;
-          std::size_t next = first;
-          for (std::int64_t i = 0; i < n[0]; ++i) {
-            while (next < last && crossings[next].i < double(i)) winding += crossings[next++].step;
-            if (winding > 0) {
-              float& d = dist[grid.linear_index(i, j, k)];
-              d = -std::max(d, std::numeric_limits<float>::min());
-            }
-          }
-          first = last;
-        }
-      },
-      threaded, 1);
 }
 
 }  // namespace
@@ -239,7 +147,10 @@ image::Volume<float> signed_distance(const geometry::TriangleMesh& surface,
       options.threaded, 1);
 
   if (options.sign == SignMethod::automatic && closed_and_oriented(surface)) {
-    mark_inside_by_crossings(surface, grid, dist, options.threaded);
+    // The winding number is then an integer off the surface: the one voxelisation's rows.
+    const image::Volume<std::uint8_t> inside = voxelize(surface, grid, {.threaded = options.threaded});
+    for (std::size_t l = 0; l < dist.size(); ++l)
+      if (inside.data()[l]) dist[l] = -std::max(dist[l], std::numeric_limits<float>::min());
     return out;
   }
   // Sign of any other surface, by the generalised winding number. It is constant off a

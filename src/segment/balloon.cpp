@@ -18,6 +18,7 @@
 #include "ido/image/filters.h"
 #include "ido/meshing/remesh.h"
 #include "ido/meshing/signed_distance.h"
+#include "ido/meshing/voxelize.h"
 #include "ido/segment/topology_repair.h"
 
 namespace ido::segment {
@@ -78,30 +79,7 @@ geometry::TriangleMesh balloon_icosphere(const Vec3& centre, double radius, int 
 image::Volume<std::uint8_t> surface_to_mask(const geometry::TriangleMesh& surface, const image::Volume<float>& grid,
                                             bool threaded) {
   if (grid.empty()) throw InvalidInput("surface to mask: the grid is empty");
-  image::Volume<std::uint8_t> mask = grid.like<std::uint8_t>(0);
-  if (surface.triangles.empty()) return mask;
-  Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
-  for (const Vec3& v : surface.vertices) {
-    const Vec3 idx = grid.world_to_index(v);
-    lo = lo.cwiseMin(idx);
-    hi = hi.cwiseMax(idx);
-  }
-  Index3 l, size;
-  for (int a = 0; a < 3; ++a) {
-    l[a] = std::clamp<std::int64_t>(std::int64_t(std::floor(lo[a])) - 2, 0, grid.size(a) - 1);
-    const std::int64_t h = std::clamp<std::int64_t>(std::int64_t(std::ceil(hi[a])) + 2, 0, grid.size(a) - 1);
-    size[a] = std::max<std::int64_t>(h - l[a] + 1, 1);
-  }
-  const image::Volume<float> sub(size, grid.spacing(), grid.index_to_world(Vec3(double(l[0]), double(l[1]), double(l[2]))),
-                                 grid.direction());
-  meshing::SignedDistanceOptions sd;
-  sd.threaded = threaded;
-  const image::Volume<float> field = meshing::signed_distance(surface, sub, sd);
-  for (std::int64_t k = 0; k < size[2]; ++k)
-    for (std::int64_t j = 0; j < size[1]; ++j)
-      for (std::int64_t i = 0; i < size[0]; ++i)
-        if (field(i, j, k) < 0.0f) mask(i + l[0], j + l[1], k + l[2]) = 1;
-  return mask;
+  return meshing::voxelize(surface, grid, {.threaded = threaded});
 }
 
 struct Balloon::State {

@@ -15,6 +15,7 @@
 
 #include "ido/core/error.h"
 #include "ido/core/parallel.h"
+#include "ido/core/statistics.h"
 #include "ido/geometry/mesh_checks.h"
 #include "ido/geometry/mesh_topology.h"
 #include "ido/geometry/self_intersection.h"
@@ -137,7 +138,7 @@ CalcificationResult add_calcification(const geometry::TriangleMesh &lumen, const
   // the plaque (and the lumen, through its own distance) can be inside. The
   // intensity field is scaled to about mm near the plaque's rim: (median plaque
   // − threshold) over one voxel.
-  const double scale = std::max(1.0, image::median(plaque_values) - o.threshold);
+  const double scale = std::max(1.0, median(plaque_values) - o.threshold);
   const double h = ct.spacing().minCoeff();
   image::Volume<float> plaque_image = ct;
   for (std::size_t li = 0; li < plaque_image.voxel_count(); ++li)

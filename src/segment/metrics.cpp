@@ -1,7 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
-// Segmentation metrics; the project's own implementation. The squared Euclidean distance
-// transform is the separable lower-envelope algorithm of Felzenszwalb & Huttenlocher,
-// "Distance transforms of sampled functions", Theory of Computing 8 (2012).
+// Segmentation metrics; the project's own implementation. Surface distances use the
+// project's one distance transform (meshing::distance_to_mask) and its one percentile.
 #include "ido/segment/metrics.h"
 
 #include <algorithm>
@@ -12,86 +11,16 @@
 
 #include "ido/core/error.h"
 #include "ido/core/parallel.h"
+#include "ido/core/statistics.h"
 #include "ido/geometry/mesh_checks.h"
 #include "ido/geometry/predicates.h"
+#include "ido/meshing/distance_field.h"
+#include "ido/meshing/voxelize.h"
 
 namespace ido::segment {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-
-/// 1D squared distance transform of f (n samples, spacing w mm) into d, using scratch v, z.
-void edt_1d(const double* f, double* d, std::size_t n, double w, std::vector<std::int64_t>& v,
-            std::vector<double>& z) {
-  v.resize(n);
-  z.resize(n + 1);
-  std::int64_t k = -1;  // index of the rightmost parabola of the lower envelope
-  for (std::size_t q = 0; q < n; ++q) {
-    if (f[q] == kInf) continue;
-    const double fq = f[q] + (w * double(q)) * (w * double(q));
-    while (true) {
-      if (k < 0) {
-        k = 0;
-        v[0] = std::int64_t(q);
-        z[0] = -kInf;
-        z[1] = kInf;
-        break;
-      }
-      const std::size_t vk = std::size_t(v[std::size_t(k)]);
-      const double fv = f[vk] + (w * double(vk)) * (w * double(vk));
-      // Where the parabolas rooted at vk and q intersect, in index units.
-      const double s = (fq - fv) / (2.0 * w * w * double(q - vk));
-      if (s <= z[std::size_t(k)]) {
-        --k;
-        continue;
-      }
-      ++k;
-      v[std::size_t(k)] = std::int64_t(q);
-      z[std::size_t(k)] = s;
-      z[std::size_t(k) + 1] = kInf;
-      break;
-    }
-  }
-  if (k < 0) {
-    std::fill(d, d + n, kInf);
-    return;
-  }
-  std::int64_t j = 0;
-  for (std::size_t q = 0; q < n; ++q) {
-    while (z[std::size_t(j) + 1] < double(q)) ++j;
-    const double dq = w * (double(q) - double(v[std::size_t(j)]));
-    d[q] = dq * dq + f[std::size_t(v[std::size_t(j)])];
-  }
-}
-
-/// Squared distance (mm²) from every voxel of a box to the nearest feature voxel.
-/// @p features: 1 where a feature lies; box size b, voxel spacing s.
-std::vector<double> squared_edt(const std::vector<std::uint8_t>& features, const Index3& b, const Vec3& s) {
-  const std::size_t n = features.size();
-  std::vector<double> g(n);
-  for (std::size_t i = 0; i < n; ++i) g[i] = features[i] ? 0.0 : kInf;
-  const std::size_t stride[3] = {1, std::size_t(b[0]), std::size_t(b[0] * b[1])};
-  for (int axis = 0; axis < 3; ++axis) {
-    const std::size_t len = std::size_t(b[axis]);
-    const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
-    const std::size_t lines = std::size_t(b[a1] * b[a2]);
-    parallel_for_ranges(
-        lines,
-        [&](std::size_t lb, std::size_t le) {
-          std::vector<double> in(len), out(len), z;
-          std::vector<std::int64_t> v;
-          for (std::size_t l = lb; l < le; ++l) {
-            const std::size_t u1 = l % std::size_t(b[a1]), u2 = l / std::size_t(b[a1]);
-            const std::size_t base = u1 * stride[a1] + u2 * stride[a2];
-            for (std::size_t q = 0; q < len; ++q) in[q] = g[base + q * stride[axis]];
-            edt_1d(in.data(), out.data(), len, s[axis], v, z);
-            for (std::size_t q = 0; q < len; ++q) g[base + q * stride[axis]] = out[q];
-          }
-        },
-        true, 16);
-  }
-  return g;
-}
 
 /// Linear indices of inside voxels with an outside 6-neighbour or on the grid border.
 std::vector<std::size_t> surface_voxels(const image::Volume<std::uint8_t>& m) {
@@ -110,7 +39,7 @@ std::vector<std::size_t> surface_voxels(const image::Volume<std::uint8_t>& m) {
 }
 
 /// Distances (mm) from each voxel of @p from to the nearest voxel of @p to, both given as
-/// linear indices of a grid of size n and spacing s, via an EDT over their joint bounding box.
+/// linear indices of a grid of size n and spacing s, via the distance transform over their joint bounding box.
 std::vector<double> directed_distances(const std::vector<std::size_t>& from, const std::vector<std::size_t>& to,
                                        const Index3& n, const Vec3& s) {
   if (from.empty()) return {};
@@ -133,20 +62,12 @@ std::vector<double> directed_distances(const std::vector<std::size_t>& from, con
     const Index3 p = unpack(li);
     return std::size_t((p[0] - lo[0]) + b[0] * ((p[1] - lo[1]) + b[1] * (p[2] - lo[2])));
   };
-  std::vector<std::uint8_t> feat(std::size_t(b[0] * b[1] * b[2]), 0);
-  for (std::size_t li : to) feat[local(li)] = 1;
-  const std::vector<double> d2 = squared_edt(feat, b, s);
+  image::Volume<std::uint8_t> feat(b, s, Vec3::Zero(), Mat3::Identity(), 0);
+  for (std::size_t li : to) feat.data()[local(li)] = 1;
+  const image::Volume<float> d = meshing::distance_to_mask(feat);
   std::vector<double> out(from.size());
-  for (std::size_t m = 0; m < from.size(); ++m) out[m] = std::sqrt(d2[local(from[m])]);
+  for (std::size_t m = 0; m < from.size(); ++m) out[m] = double(d.data()[local(from[m])]);
   return out;
-}
-
-/// Nearest-rank percentile (p in (0, 1]) of a non-empty sample.
-double percentile(std::vector<double> v, double p) {
-  const std::size_t rank = std::size_t(std::ceil(p * double(v.size())));
-  const auto it = v.begin() + std::ptrdiff_t(std::clamp<std::size_t>(rank, 1, v.size()) - 1);
-  std::nth_element(v.begin(), it, v.end());
-  return *it;
 }
 
 void require_nonempty(const image::Volume<std::uint8_t>& v, const char* what) {
@@ -223,101 +144,6 @@ std::int64_t mask_euler_characteristic(const image::Volume<std::uint8_t>& mask) 
   return 2 * (v - e + f - c + h);
 }
 
-image::Volume<std::uint8_t> rasterize_mesh(const geometry::TriangleMesh& mesh, const image::GridGeometry& grid) {
-  image::Volume<std::uint8_t> out(grid.size, grid.spacing_mm, grid.origin_mm, grid.direction, 0);
-  if (out.empty() || mesh.triangles.empty()) return out;
-  const std::int64_t nx = grid.size[0], ny = grid.size[1], nz = grid.size[2];
-  const std::size_t nv = mesh.vertices.size();
-  std::vector<Vec3> q(nv);
-  for (std::size_t m = 0; m < nv; ++m) {
-    if (!mesh.vertices[m].allFinite()) throw InvalidInput("rasterize_mesh: vertex coordinate is not finite");
-    q[m] = out.world_to_index(mesh.vertices[m]);
-  }
-  const double handed = out.world_to_index_matrix().determinant() < 0.0 ? -1.0 : 1.0;
-  // Bin triangles by the (j, k) rows their (y, z) bounding box may cover.
-  const std::size_t rows = std::size_t(ny * nz);
-  std::vector<std::size_t> start(rows + 1, 0);
-  std::vector<std::array<std::int64_t, 4>> span(mesh.triangles.size());
-  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
-    const Tri& tri = mesh.triangles[t];
-    for (int c = 0; c < 3; ++c)
-      if (tri[std::size_t(c)] < 0 || std::size_t(tri[std::size_t(c)]) >= nv)
-        throw InvalidInput("rasterize_mesh: triangle " + std::to_string(t) + " has a vertex index out of range");
-    double ylo = kInf, yhi = -kInf, zlo = kInf, zhi = -kInf;
-    for (int c = 0; c < 3; ++c) {
-      const Vec3& p = q[std::size_t(tri[std::size_t(c)])];
-      ylo = std::min(ylo, p.y());
-      yhi = std::max(yhi, p.y());
-      zlo = std::min(zlo, p.z());
-      zhi = std::max(zhi, p.z());
-    }
-    auto& s = span[t];
-    s = {std::max<std::int64_t>(0, std::int64_t(std::floor(ylo))), std::min<std::int64_t>(ny - 1, std::int64_t(std::ceil(yhi))),
-         std::max<std::int64_t>(0, std::int64_t(std::floor(zlo))), std::min<std::int64_t>(nz - 1, std::int64_t(std::ceil(zhi)))};
-    for (std::int64_t k = s[2]; k <= s[3]; ++k)
-      for (std::int64_t j = s[0]; j <= s[1]; ++j) ++start[std::size_t(j + ny * k) + 1];
-  }
-  for (std::size_t r = 0; r < rows; ++r) start[r + 1] += start[r];
-  std::vector<std::int32_t> bins(start[rows]);
-  {
-    std::vector<std::size_t> fill(start.begin(), start.end() - 1);
-    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
-      const auto& s = span[t];
-      for (std::int64_t k = s[2]; k <= s[3]; ++k)
-        for (std::int64_t j = s[0]; j <= s[1]; ++j) bins[fill[std::size_t(j + ny * k)]++] = std::int32_t(t);
-    }
-  }
-  // Side of the query point (py, pz) + (ε, ε²) w.r.t. the directed edge a→b in the (y, z)
-  // plane, ±1 (Simulation of Simplicity, Edelsbrunner & Mücke 1990, for the point only). The edge is evaluated in a canonical vertex order so the two triangles
-  // sharing it get exactly opposite answers.
-  auto side = [](const Vec3& a0, const Vec3& b0, double py, double pz) -> int {
-    const bool swap = (b0.y() < a0.y()) || (b0.y() == a0.y() && b0.z() < a0.z());
-    const Vec3& a = swap ? b0 : a0;
-    const Vec3& b = swap ? a0 : b0;
-    const double ey = b.y() - a.y(), ez = b.z() - a.z();
-    // Exact sign (adaptive predicate), so the triangles around a vertex partition the plane.
-    const double o = geometry::orient2d(Vec2(a.y(), a.z()), Vec2(b.y(), b.z()), Vec2(py, pz));
-    int sgn = o > 0 ? 1 : o < 0 ? -1 : 0;
-    if (sgn == 0) sgn = ez != 0 ? (ez < 0 ? 1 : -1) : (ey > 0 ? 1 : ey < 0 ? -1 : 0);
-    return swap ? -sgn : sgn;
-  };
-  parallel_for_ranges(
-      rows,
-      [&](std::size_t rb, std::size_t re) {
-        std::vector<std::pair<double, int>> hits;
-        for (std::size_t r = rb; r < re; ++r) {
-          if (start[r] == start[r + 1]) continue;
-          const double py = double(std::int64_t(r) % ny), pz = double(std::int64_t(r) / ny);
-          hits.clear();
-          for (std::size_t b = start[r]; b < start[r + 1]; ++b) {
-            const Tri& tri = mesh.triangles[std::size_t(bins[b])];
-            const Vec3 &a = q[std::size_t(tri[0])], &bb = q[std::size_t(tri[1])], &c = q[std::size_t(tri[2])];
-            const int s0 = side(a, bb, py, pz), s1 = side(bb, c, py, pz), s2 = side(c, a, py, pz);
-            if (s0 == 0 || s0 != s1 || s1 != s2) continue;
-            // Barycentric weights from the unperturbed sub-areas; x of the crossing.
-            const double wa = (c.y() - bb.y()) * (pz - bb.z()) - (c.z() - bb.z()) * (py - bb.y());
-            const double wb = (a.y() - c.y()) * (pz - c.z()) - (a.z() - c.z()) * (py - c.y());
-            const double wc = (bb.y() - a.y()) * (pz - a.z()) - (bb.z() - a.z()) * (py - a.y());
-            const double sum = wa + wb + wc;
-            const double x = sum != 0.0 ? (wa * a.x() + wb * bb.x() + wc * c.x()) / sum : (a.x() + bb.x() + c.x()) / 3.0;
-            // s0 > 0: the triangle is counter-clockwise in (y, z), its normal has +x: leaving.
-            hits.emplace_back(x, s0 > 0 ? -1 : 1);
-          }
-          if (hits.empty()) continue;
-          std::sort(hits.begin(), hits.end());
-          std::uint8_t* row = out.data().data() + r * std::size_t(nx);
-          int winding = 0;
-          std::size_t h = 0;
-          for (std::int64_t i = 0; i < nx; ++i) {
-            while (h < hits.size() && hits[h].first < double(i)) winding += hits[h++].second;
-            row[i] = (winding * handed) != 0 ? 1 : 0;
-          }
-        }
-      },
-      true, 16);
-  return out;
-}
-
 SegmentationScores compare_masks(const image::Volume<std::uint8_t>& mask_in, const image::Volume<std::uint8_t>& truth) {
   require_nonempty(mask_in, "mask");
   require_nonempty(truth, "truth");
@@ -372,7 +198,7 @@ SegmentationScores compare_mesh_to_mask(const geometry::TriangleMesh& mesh, cons
     throw InvalidInput(check.triangles == 0 ? std::string("the surface has no triangles")
                                             : "the surface is not closed (" + std::to_string(check.boundary_edges) +
                                                   " boundary edges): only a closed surface has an inside to score");
-  return compare_masks(rasterize_mesh(mesh, truth), truth);
+  return compare_masks(meshing::voxelize(mesh, image::GridGeometry::of(truth)), truth);
 }
 
 }  // namespace ido::segment

@@ -82,6 +82,20 @@ ScriptedTrajectory plunge(double duration_s) {
   return ScriptedTrajectory(t, p);
 }
 
+TEST(Simulator, TimingPercentilesFollowIdosOnePercentile) {
+  std::vector<double> v;
+  for (int i = 100; i >= 1; --i) v.push_back(double(i));
+  const Percentiles p = percentiles(v);
+  EXPECT_EQ(p.count, 100u);
+  EXPECT_DOUBLE_EQ(p.p50, 50.5);   // numpy.percentile(range(1, 101), 50)
+  EXPECT_DOUBLE_EQ(p.p99, 99.01);  // ... 99
+  EXPECT_DOUBLE_EQ(p.p999, 99.901);
+  EXPECT_DOUBLE_EQ(p.max, 100.0);
+  const Percentiles none = percentiles({});
+  EXPECT_EQ(none.count, 0u);
+  EXPECT_EQ(none.max, 0.0);
+}
+
 TEST(Simulator, ScriptedSessionDrillsAndRenderCopyMatches) {
   for (const int threads : {1, 2}) {
     TetHierarchy h(make_block({12, 12, 12}, 3.0));

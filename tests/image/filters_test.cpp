@@ -180,9 +180,7 @@ TEST(Gradient, LinearFieldIsExactInWorldFrame) {
 }
 
 TEST(RobustStats, MedianAndMad) {
-  EXPECT_DOUBLE_EQ(median({3, 1, 2}), 2.0);
-  EXPECT_DOUBLE_EQ(median({4, 1, 3, 2}), 2.5);
-  EXPECT_THROW((void)median({}), InvalidInput);
+  EXPECT_THROW((void)robust_stats({}), InvalidInput);
   const auto s = robust_stats({1, 2, 3, 4, 100});
   EXPECT_DOUBLE_EQ(s.median, 3.0);
   EXPECT_DOUBLE_EQ(s.mad, 1.0);  // |dev| = 2 1 0 1 97

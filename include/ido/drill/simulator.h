@@ -74,7 +74,7 @@ struct Percentiles {
   double p50 = 0.0, p99 = 0.0, p999 = 0.0, max = 0.0;
   std::size_t count = 0;
 };
-/// Percentiles of @p values (nearest rank).
+/// Percentiles of @p values (ido::percentile's definition); all zero for an empty series.
 [[nodiscard]] Percentiles percentiles(std::vector<double> values);
 
 /// Where a session's memory goes (bytes allocated, capacities; see Simulator::memory_use).

@@ -48,10 +48,6 @@ struct GaussianOptions {
 [[nodiscard]] Volume<float> gradient_magnitude(const Volume<float>& volume,
                                                bool threaded = true);
 
-/// Median of @p values (the mean of the two middle values for an even count).
-/// @throws ido::InvalidInput if @p values is empty.
-[[nodiscard]] double median(std::vector<double> values);
-
 /// Robust location and spread of a sample.
 struct RobustStats {
   double median = 0.0;      ///< median of the sample (intensity units)

@@ -217,9 +217,10 @@ class Balloon {
 [[nodiscard]] BalloonResult segment_balloon(const image::Volume<float>& ct, const std::vector<Vec3>& seeds_mm,
                                             const BalloonOptions& options = {}, Progress* progress = nullptr);
 
-/// Binary mask (1 inside) of a closed surface on the grid of @p grid (same size, spacing,
-/// origin, direction): a voxel is inside when its centre has generalised winding number
-/// > 0.5. @throws ido::InvalidInput on an empty grid.
+/// Binary mask (1 inside) of the balloon's closed surface on the grid of @p grid (same size,
+/// spacing, origin, direction): meshing::voxelize, ido's one inside rule, so `ido segment
+/// --mask` and `ido compare --mesh` count the same voxels. @throws ido::InvalidInput on an
+/// empty grid, or as meshing::voxelize.
 [[nodiscard]] image::Volume<std::uint8_t> surface_to_mask(const geometry::TriangleMesh& surface,
                                                           const image::Volume<float>& grid,
                                                           bool threaded = true);

@@ -43,20 +43,6 @@ struct SegmentationScores {
 [[nodiscard]] SegmentationScores compare_masks(const image::Volume<std::uint8_t>& mask,
                                                const image::Volume<std::uint8_t>& truth);
 
-/// Rasterises a closed, oriented triangle mesh onto @p grid: a voxel is 1 when its centre is
-/// inside (non-zero winding number along the voxel row, computed with a symbolic
-/// perturbation so a centre exactly on a triangle edge or vertex is counted once).
-/// @throws ido::InvalidInput for an out-of-range triangle index.
-[[nodiscard]] image::Volume<std::uint8_t> rasterize_mesh(const geometry::TriangleMesh& closed_mesh,
-                                                         const image::GridGeometry& grid);
-
-/// rasterize_mesh onto the grid of @p grid_like (any voxel type).
-template <class T>
-[[nodiscard]] image::Volume<std::uint8_t> rasterize_mesh(const geometry::TriangleMesh& closed_mesh,
-                                                         const image::Volume<T>& grid_like) {
-  return rasterize_mesh(closed_mesh, image::GridGeometry::of(grid_like));
-}
-
 /// Scores a closed surface against a truth mask: the mesh is rasterised onto the truth's
 /// grid, then compare_masks. @throws ido::InvalidInput for an empty truth, a bad mesh, or a
 /// surface that is not closed (boundary edges: it has no inside).
