@@ -91,40 +91,25 @@ void check_output_file(const std::string& path, std::string_view option) {
   if (!fs::is_directory(dir, ec))
     throw InvalidInput(fmt::format("{} {}: folder '{}' does not exist", option, path, dir.string()));
   const fs::path probe = dir / fmt::format(".tmp-{}-probe", static_cast<long>(::getpid()));
+  const int guard = register_temporary_file(probe);
   const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL, 0600);
+  if (fd < 0) unregister_temporary_file(guard);
   if (fd < 0) throw InvalidInput(fmt::format("{} {}: cannot create a file in folder '{}'", option, path, dir.string()));
   ::close(fd);
   fs::remove(probe, ec);
-}
-
-OutputBatch::~OutputBatch() {
-  std::error_code ec;
-  for (const auto& f : m_files) std::filesystem::remove(f.first, ec);
+  unregister_temporary_file(guard);
 }
 
 std::string OutputBatch::stage(const std::string& path, std::string_view option) {
   check_output_file(path, option);
-  for (const auto& f : m_files)
-    if (std::filesystem::path(f.second).lexically_normal() == std::filesystem::path(path).lexically_normal())
-      throw InvalidInput(fmt::format("{} {}: the same file is named by another output", option, path));
-  const std::filesystem::path p(path);
-  const auto tmp = (p.has_parent_path() ? p.parent_path() : std::filesystem::path(".")) /
-                   fmt::format(".tmp-{}-{}-{}", static_cast<long>(::getpid()), m_files.size(), p.filename().string());
-  m_files.emplace_back(tmp.string(), path);
-  return tmp.string();
+  if (!m_batch.staged(path).empty())
+    throw InvalidInput(fmt::format("{} {}: the same file is named by another output", option, path));
+  return m_batch.stage(path).string();
 }
 
-void OutputBatch::commit() {
-  for (auto& f : m_files) {
-    std::error_code ec;
-    if (!std::filesystem::exists(f.first, ec)) continue;  // an optional output left unwritten
-    std::filesystem::rename(f.first, f.second, ec);
-    if (ec) throw IoError(f.second, "cannot rename the temporary file into place");
-  }
-  m_files.clear();
-}
+void OutputBatch::commit() { m_batch.commit(); }
 
-std::array<Vec3, 2> parse_roi(const std::string& text) {
+geometry::Aabb parse_roi(const std::string& text) {
   std::vector<double> v;
   std::size_t start = 0;
   while (start <= text.size()) {

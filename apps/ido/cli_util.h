@@ -9,8 +9,10 @@
 #include <utility>
 #include <vector>
 
+#include "ido/core/atomic_file.h"
 #include "ido/core/math.h"
 #include "ido/core/progress.h"
+#include "ido/geometry/aabb.h"
 #include "ido/segment/organ.h"
 
 namespace ido::cli {
@@ -24,7 +26,7 @@ Index3 parse_index3(std::string_view text, std::string_view what);
 
 /// Parses "x0,y0,z0,x1,y1,z1" (world mm) into a box's corners, naming --roi in errors.
 /// @throws ido::InvalidInput on anything but six numbers with each minimum below its maximum.
-std::array<Vec3, 2> parse_roi(const std::string& text);
+geometry::Aabb parse_roi(const std::string& text);
 
 /// The organ named by option @p option's value @p name (segment::parse_organ).
 /// @throws ido::InvalidInput naming the option and the choices.
@@ -51,22 +53,19 @@ void write_text_file(const std::string& path, const std::string& text);
 void check_output_file(const std::string& path, std::string_view option);
 
 /// The outputs of one run, written all or none: stage() checks a target (check_output_file)
-/// and gives the temporary path beside it (same extension) to write instead; commit() renames
-/// every staged file into place. Until then nothing is at the targets, and a batch destroyed
-/// uncommitted (an exception) removes its temporaries.
+/// and gives the path to write instead (the same file name in a hidden staging folder beside
+/// it, ido::FileBatch); commit() renames every staged file into place. Until then nothing is at the targets, and a batch destroyed
+/// uncommitted (an exception) removes its temporaries; a fatal signal removes them too
+/// (ido::FileBatch, install_signal_cleanup), or waits for a commit under way to end.
 class OutputBatch {
  public:
-  OutputBatch() = default;
-  OutputBatch(const OutputBatch&) = delete;
-  OutputBatch& operator=(const OutputBatch&) = delete;
-  ~OutputBatch();
   /// @throws ido::InvalidInput as check_output_file.
   std::string stage(const std::string& path, std::string_view option);
   /// @throws ido::IoError naming the target that could not be put in place.
   void commit();
 
  private:
-  std::vector<std::pair<std::string, std::string>> m_files;  // (temporary, target)
+  FileBatch m_batch;
 };
 
 }  // namespace ido::cli

@@ -2,7 +2,12 @@
 // `ido phantom KIND -o CT.nii.gz [--labels TRUTH.nii.gz] ...`: writes a synthetic CT volume
 // (HU) and its ground-truth labels, and prints the seed(s) to start `ido segment` from.
 // Presentation only: the phantom comes from ido::segment::make_phantom.
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <new>
 #include <string>
 
 #include <fmt/format.h>
@@ -11,6 +16,7 @@
 #include "cli_util.h"
 #include "command.h"
 #include "ido/core/error.h"
+#include "ido/io/memory_budget.h"
 #include "ido/io/volume_io.h"
 #include "ido/segment/phantom.h"
 
@@ -31,6 +37,36 @@ struct PhantomCliOptions {
   double drill_speed_mm_s = 4.0;
 };
 
+/// Refuses a --spacing whose grid would not fit the memory budget (ido --memory-limit) before
+/// anything is allocated. The kind's extent is read off a probe build at 2-mm voxels (one
+/// sample each, no noise: at most about 130 000 voxels, a few milliseconds), whose grid has
+/// max(2, round(extent / 2 mm)) voxels along an axis; the grid at @p spacing_mm is counted
+/// from the smallest extent that allows, so a phantom that fits is never refused. A spacing
+/// make_phantom refuses anyway (not in (0, 10] mm) is left to it.
+void check_phantom_grid(segment::PhantomKind kind, const Vec3& spacing_mm, const std::string& spacing_text) {
+  constexpr double kProbeMm = 2.0, kMaxSpacingMm = 10.0;
+  if (!((spacing_mm.array() > 0.0).all() && (spacing_mm.array() <= kMaxSpacingMm).all())) return;
+  segment::PhantomOptions probe_options;
+  probe_options.spacing_mm = Vec3::Constant(kProbeMm);
+  probe_options.supersampling = 1;
+  probe_options.threaded = false;
+  const segment::Phantom probe = segment::make_phantom(kind, probe_options);
+  std::array<std::uint64_t, 3> n{};
+  for (int a = 0; a < 3; ++a) {
+    const double probe_voxels = static_cast<double>(probe.ct_hu.size(a));
+    const double extent_mm = probe_voxels > 2 ? kProbeMm * (probe_voxels - 0.5) : 0.0;
+    const double count = std::max(2.0, std::round(extent_mm / spacing_mm[a]));
+    n[static_cast<std::size_t>(a)] = count >= 1e18 ? std::uint64_t(1e18) : static_cast<std::uint64_t>(count);
+  }
+  // The CT (float) and label (byte) volumes.
+  const std::uint64_t bytes = io::saturating_product({n[0], n[1], n[2], sizeof(float) + sizeof(std::uint8_t)});
+  if (bytes > io::memory_limit_bytes())
+    throw InvalidInput(fmt::format("--spacing {}: the {} phantom's grid of at least {} x {} x {} voxels needs {}, over "
+                                   "the memory limit of {} (ido --memory-limit)",
+                                   spacing_text, segment::phantom_kind_name(kind), n[0], n[1], n[2],
+                                   io::format_bytes(bytes), io::format_bytes(io::memory_limit_bytes())));
+}
+
 void run(const PhantomCliOptions& o) {
   const auto kind = segment::parse_phantom_kind(o.kind);
   if (!io::looks_like_volume(o.output) || std::filesystem::is_directory(o.output))
@@ -39,8 +75,14 @@ void run(const PhantomCliOptions& o) {
     throw InvalidInput(fmt::format("{}: the labels output must be a volume file (.nii, .nii.gz, .nrrd, .mha)", o.labels));
   if (o.noise_fraction >= 0.0 && o.noise_hu > 0.0)
     throw InvalidInput("give either --noise or --noise-fraction, not both");
+  // The outputs are checked before the work and written all or none.
+  OutputBatch outputs;
+  const std::string ct_file = outputs.stage(o.output, "-o");
+  const std::string labels_file = o.labels.empty() ? std::string() : outputs.stage(o.labels, "--labels");
+  const std::string path_file = o.drill_path.empty() ? std::string() : outputs.stage(o.drill_path, "--drill-path");
   segment::PhantomOptions po;
   po.spacing_mm = parse_vec3(o.spacing, "--spacing");
+  check_phantom_grid(kind, po.spacing_mm, o.spacing);
   po.blur_voxels = o.blur_voxels;
   po.seed = o.seed;
   po.noise_hu = o.noise_hu;
@@ -52,11 +94,19 @@ void run(const PhantomCliOptions& o) {
   }
   if (!o.drill_path.empty() && !(o.drill_speed_mm_s > 0.0))
     throw InvalidInput("--drill-speed must be positive");
-  const segment::Phantom ph = segment::make_phantom(kind, po);
+  const segment::Phantom ph = [&] {
+    try {
+      return segment::make_phantom(kind, po);
+    } catch (const std::bad_alloc&) {
+      // A grid just under the budget that still did not fit beside the rest of the process.
+      throw InvalidInput(fmt::format("--spacing {}: the {} phantom's grid does not fit in memory", o.spacing,
+                                     segment::phantom_kind_name(kind)));
+    }
+  }();
   if (!o.drill_path.empty() && ph.drill_path_mm.empty())
     throw InvalidInput(fmt::format("--drill-path: the {} phantom has no bone to drill", o.kind));
-  io::write_volume(o.output, ph.ct_hu);
-  if (!o.labels.empty()) io::write_volume(o.labels, ph.labels);
+  io::write_volume(ct_file, ph.ct_hu);
+  if (!o.labels.empty()) io::write_volume(labels_file, ph.labels);
   if (!o.drill_path.empty()) {
     // A scripted tool trajectory (ido drill's CSV: t, x, y, z) along the phantom's drill
     // polyline at a constant speed.
@@ -67,8 +117,9 @@ void run(const PhantomCliOptions& o) {
       const Vec3& p = ph.drill_path_mm[i];
       csv += fmt::format("{:.6f},{:.6f},{:.6f},{:.6f}\n", t, p.x(), p.y(), p.z());
     }
-    write_text_file(o.drill_path, csv);
+    write_text_file(path_file, csv);
   }
+  outputs.commit();
 
   if (o.json_seeds) {
     nlohmann::json seeds = nlohmann::json::array();

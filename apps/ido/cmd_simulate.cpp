@@ -67,14 +67,15 @@ std::vector<double> picture_values(const geometry::TetMesh& frame, const std::st
 /// Pictures of the frames run_scene wrote: frame indices 0, every, 2·every, … and the last.
 /// The camera frames the union of all pictured frames' bounding boxes and the colour range is
 /// the min..max of the value over all of them, so the pictures compare.
-nlohmann::json write_snapshots(const Options& o, std::int64_t frames, Progress* progress) {
+nlohmann::json write_snapshots(const Options& o, std::int64_t frames, const FileBatch& outputs, Progress* progress) {
   const auto [w, h] = parse_picture_size(o.snapshot_size, "--snapshot-size");
   SnapshotWriter writer(o.snapshots, {.width_px = w, .height_px = h, .azimuth_deg = 20.0, .elevation_deg = 15.0});
   std::vector<std::int64_t> picked;
   for (std::int64_t f = 0; f < frames; ++f)
     if (f % o.snapshot_every == 0 || f == frames - 1) picked.push_back(f);
   const std::filesystem::path out_dir(o.out_dir);
-  auto frame_path = [&](std::int64_t f) { return out_dir / fmt::format("frame_{:04d}.vtu", f); };
+  // The frames are still staged (written with the run's other outputs at the end).
+  auto frame_path = [&](std::int64_t f) { return outputs.staged(out_dir / fmt::format("frame_{:04d}.vtu", f)); };
   // Pass 1: bounds and value range over the whole run.
   Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   double vmin = std::numeric_limits<double>::infinity(), vmax = -vmin;
@@ -127,22 +128,35 @@ void run(const Options& o, const GlobalOptions& g) {
   }
   auto scene = io::load_scene(o.scene);
   auto progress = make_progress(g.quiet);
-  const auto result = io::run_scene(scene, o.out_dir, progress.get());
-  write_energy_plot(std::filesystem::path(o.out_dir) / "energy.png", result);
+  // Every output of the run (frames, index, energies, plot, report) is written, or none.
+  const std::filesystem::path out_dir(o.out_dir);
+  std::error_code ec;
+  const bool made_folder = !std::filesystem::exists(out_dir, ec);
+  FileBatch outputs;
   std::size_t pictures = 0;
-  if (!o.snapshots.empty()) {
-    const nlohmann::json snap = write_snapshots(o, result.frames, progress.get());
-    pictures = snap["snapshots"].size();
-    // run_scene wrote report.json: add the pictures to it.
-    const auto report_path = std::filesystem::path(o.out_dir) / "report.json";
-    std::ifstream in(report_path);
-    std::stringstream text;
-    text << in.rdbuf();
-    nlohmann::json report_json = nlohmann::json::parse(text.str(), nullptr, false);
-    if (report_json.is_discarded() || !report_json.is_object())
-      throw IoError(report_path.string(), "cannot read back the run's report to add the snapshots");
-    report_json.update(snap);
-    write_text_file(report_path.string(), report_json.dump(2) + "\n");
+  io::SceneRunResult result;
+  try {
+    result = io::run_scene(scene, out_dir, progress.get(), &outputs);
+    write_energy_plot(outputs.stage(out_dir / "energy.png"), result);
+    if (!o.snapshots.empty()) {
+      const nlohmann::json snap = write_snapshots(o, result.frames, outputs, progress.get());
+      pictures = snap["snapshots"].size();
+      // run_scene staged report.json: add the pictures to it.
+      const auto report_path = outputs.staged(out_dir / "report.json");
+      std::ifstream in(report_path);
+      std::stringstream text;
+      text << in.rdbuf();
+      nlohmann::json report_json = nlohmann::json::parse(text.str(), nullptr, false);
+      if (report_json.is_discarded() || !report_json.is_object())
+        throw IoError((out_dir / "report.json").string(), "cannot read back the run's report to add the snapshots");
+      report_json.update(snap);
+      write_text_file(report_path.string(), report_json.dump(2) + "\n");
+    }
+    outputs.commit();
+  } catch (...) {
+    outputs.discard();
+    if (made_folder) std::filesystem::remove(out_dir, ec);  // only if empty
+    throw;
   }
   if (!g.quiet) {
     std::printf("simulated %lld steps in %.3f s, %lld frames written to %s\n",

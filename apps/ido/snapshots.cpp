@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdint>
 #include <cstring>
 #include <system_error>
 #include <utility>
@@ -12,6 +13,7 @@
 #include <fmt/format.h>
 
 #include "ido/core/error.h"
+#include "ido/io/memory_budget.h"
 
 namespace ido::cli {
 
@@ -31,6 +33,12 @@ std::array<int, 2> parse_picture_size(const std::string& text, std::string_view 
   }
   if (w < 1 || h < 1 || w > 16384 || h > 16384)
     throw InvalidInput(fmt::format("{} must be within 1..16384 pixels per side, got '{}'", what, text));
+  // The picture's colour and depth buffers and its PNG: about 12 bytes a pixel.
+  const std::uint64_t bytes = io::saturating_product({std::uint64_t(w), std::uint64_t(h), 12});
+  if (bytes > io::memory_limit_bytes())
+    throw InvalidInput(fmt::format("{} {}: a picture of {} x {} pixels needs {}, over the memory limit of {} "
+                                   "(ido --memory-limit)",
+                                   what, text, w, h, io::format_bytes(bytes), io::format_bytes(io::memory_limit_bytes())));
   return {w, h};
 }
 
@@ -81,7 +89,7 @@ std::filesystem::path SnapshotWriter::write(viz::Renderer& renderer) {
                                    renderer.height(), m_options.width_px, m_options.height_px));
   if (!m_camera) {
     const auto b = renderer.bounds();
-    frame(b[0], b[1]);
+    frame(b.min, b.max);
   }
   renderer.set_camera(*m_camera);
   return write(renderer.render());

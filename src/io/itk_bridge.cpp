@@ -7,9 +7,15 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <optional>
 #include <regex>
+#include <set>
 
 #include <fmt/format.h>
+#include <gdcmExplicitDataElement.h>
+#include <gdcmImplicitDataElement.h>
+#include <gdcmReader.h>
+#include <gdcmTrace.h>
 #include <itkGDCMImageIO.h>
 #include <itkGDCMSeriesFileNames.h>
 #include <itkImage.h>
@@ -57,6 +63,8 @@ void silence_itk() {
   static const bool done = [] {
     itk::Object::GlobalWarningDisplayOff();
     nifti_set_debug_level(0);
+    // GDCM warns on stderr (e.g. "Incomplete Pixel Data found"); ido checks and words it.
+    gdcm::Trace::WarningOff();
     return true;
   }();
   (void)done;
@@ -163,6 +171,12 @@ void check_grid_budget(const std::string& path, std::uint64_t nx, std::uint64_t 
 }
 
 RawVolume read_file(const std::string& path, VolumeKind kind) {
+  // teem opens an NRRD's data file while reading the header: a missing one is told here.
+  std::optional<DetachedData> nrrd_data;
+  if (kind == VolumeKind::Nrrd) {
+    nrrd_data = nrrd_detached_data(path);
+    if (nrrd_data) check_detached_file(path, *nrrd_data);
+  }
   auto io = make_io(kind);
   io->SetFileName(path);
   try {
@@ -196,16 +210,32 @@ RawVolume read_file(const std::string& path, VolumeKind kind) {
   // (NIfTI files are checked by volume_io.cpp through nifti_header.h).
   // A compressed one whose stream does not inflate is read as whatever MetaIO's buffer held
   // (it only prints "Uncompress failed"): inflate it first (nifti_header.h).
+  // A header/data pair (.mhd + .raw, .nhdr + .raw): the data file must hold what the header
+  // declares (ITK fails on it with its internals, or reads a short one without a word).
   bool uncompressed = false, compressed_here = false;
+  std::optional<DetachedData> detached;
   if (kind == VolumeKind::Meta) {
     auto* meta = dynamic_cast<itk::MetaImageIO*>(io.GetPointer());
-    const bool local = meta && std::string(meta->GetMetaImagePointer()->ElementDataFileName()) == "LOCAL";
+    const std::string data_file = meta ? meta->GetMetaImagePointer()->ElementDataFileName() : "LOCAL";
+    const bool local = data_file == "LOCAL";
     uncompressed = local && !meta->GetMetaImagePointer()->CompressedData();
     compressed_here = local && meta->GetMetaImagePointer()->CompressedData();
+    // One data file (not a LIST of slices nor a numbered pattern).
+    if (meta && !local && !data_file.empty() && data_file.rfind("LIST", 0) != 0 &&
+        data_file.find('%') == std::string::npos && data_file.find(' ') == std::string::npos) {
+      std::filesystem::path p(data_file);
+      if (p.is_relative()) p = std::filesystem::path(path).parent_path() / p;
+      const int header_size = meta->GetMetaImagePointer()->HeaderSize();
+      detached = DetachedData{p.string(), meta->GetMetaImagePointer()->CompressedData() ? DataEncoding::Zlib : DataEncoding::Raw,
+                              header_size};
+    }
+  } else {
+    detached = nrrd_data;
   }
   std::error_code ec;
   const auto file_size = std::filesystem::file_size(path, ec);
   const auto voxel_bytes = static_cast<std::uintmax_t>(io->GetImageSizeInBytes());
+  if (detached) check_detached_voxels(path, *detached, voxel_bytes);
   if (compressed_here) check_meta_zlib_voxels(path, voxel_bytes);
   if (uncompressed && !ec && file_size < voxel_bytes)
     throw IoError(path, fmt::format("file has {} bytes, too few for the {} bytes of voxels its header declares (truncated?)",
@@ -238,6 +268,61 @@ RawVolume itk_read_file(const std::string& path, VolumeKind kind) {
 }
 
 namespace {
+
+const gdcm::Tag kPixelDataTag(0x7fe0, 0x0010);
+const gdcm::Tag kSeriesUidTag(0x0020, 0x000e);
+
+/// GDCM reads a slice whose pixel data is cut short with the missing pixels as 0 (it only
+/// warns on stderr): the file must hold every byte its elements declare. Reads the file
+/// with GDCM (headers and the pixel bytes, not decoded). Thread-safe.
+/// @throws ido::IoError naming @p file.
+void check_dicom_slice_bytes(const std::string& file) {
+  gdcm::Reader reader;
+  reader.SetFileName(file.c_str());
+  if (!reader.Read()) return;  // left to ITK's reader, which words its own error
+  const gdcm::File& f = reader.GetFile();
+  const gdcm::DataSet& ds = f.GetDataSet();
+  if (!ds.FindDataElement(kPixelDataTag)) throw IoError(file, "DICOM slice has no pixel data");
+  const bool explicit_vr = f.GetHeader().GetDataSetTransferSyntax().GetNegociatedType() == gdcm::TransferSyntax::Explicit;
+  // The preamble and meta header, then the data set as encoded.
+  const std::uint64_t declared = static_cast<std::uint64_t>(f.GetHeader().GetFullLength()) +
+                                 (explicit_vr ? static_cast<std::uint64_t>(ds.GetLength<gdcm::ExplicitDataElement>())
+                                              : static_cast<std::uint64_t>(ds.GetLength<gdcm::ImplicitDataElement>()));
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(file, ec);
+  if (ec || size >= declared) return;
+  const gdcm::VL pixel_vl = ds.GetDataElement(kPixelDataTag).GetVL();
+  const std::uint64_t missing = declared - size;
+  if (!pixel_vl.IsUndefined() && missing <= static_cast<std::uint64_t>(pixel_vl))
+    throw IoError(file, fmt::format("DICOM pixel data is cut short: {} of its {} bytes are in the file (truncated?)",
+                                    static_cast<std::uint64_t>(pixel_vl) - missing, static_cast<std::uint64_t>(pixel_vl)));
+  throw IoError(file, fmt::format("DICOM file has {} bytes, {} fewer than its elements declare (truncated?)", size,
+                                  missing));
+}
+
+/// GDCM's series scan leaves out a file of the series that has no pixel data, so the series
+/// would read with a slice missing: any other file in @p dir with the series' UID is refused.
+void check_no_slice_left_out(const std::string& dir, const std::string& uid, const std::vector<std::string>& files) {
+  std::set<std::filesystem::path> listed;
+  for (const auto& f : files) listed.insert(std::filesystem::path(f).lexically_normal());
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
+    if (!entry.is_regular_file(ec) || listed.count(entry.path().lexically_normal()) > 0) continue;
+    gdcm::Reader reader;
+    reader.SetFileName(entry.path().c_str());
+    if (!reader.ReadUpToTag(kPixelDataTag)) continue;  // not DICOM
+    const gdcm::DataSet& ds = reader.GetFile().GetDataSet();
+    if (!ds.FindDataElement(kSeriesUidTag)) continue;
+    const gdcm::ByteValue* value = ds.GetDataElement(kSeriesUidTag).GetByteValue();
+    if (!value) continue;
+    std::string its_uid(value->GetPointer(), value->GetLength());
+    while (!its_uid.empty() && (its_uid.back() == ' ' || its_uid.back() == '\0')) its_uid.pop_back();
+    if (its_uid == uid)
+      throw IoError(entry.path().string(), ds.FindDataElement(kPixelDataTag)
+                                               ? "DICOM slice of the series cannot be read by the series reader"
+                                               : "DICOM slice has no pixel data");
+  }
+}
 
 RawVolume read_serially(const std::string& dir, itk::ImageSeriesReader<FloatImage>& reader) {
   try {
@@ -272,10 +357,12 @@ RawVolume read_slices_in_parallel(const std::string& dir, const std::vector<std:
     readers[s]->SetFileName(files[s]);
   }
   std::vector<std::string> problems(files.size());
+  std::vector<char> own(files.size(), 0);
   ido::parallel_for(
       files.size(),
       [&](std::size_t s) {
         try {
+          check_dicom_slice_bytes(files[s]);
           readers[s]->Update();
           const FloatImage* slice = readers[s]->GetOutput();
           const auto sz = slice->GetLargestPossibleRegion().GetSize();
@@ -284,6 +371,9 @@ RawVolume read_slices_in_parallel(const std::string& dir, const std::vector<std:
           } else {
             std::copy_n(slice->GetBufferPointer(), nx * ny, out.voxels.data() + s * nx * ny);
           }
+        } catch (const IoError& e) {
+          problems[s] = e.problem();  // ido's own check: already in ido's words
+          own[s] = 1;
         } catch (const itk::ExceptionObject& e) {
           problems[s] = itk_problem(e);
         } catch (const std::exception& e) {
@@ -293,7 +383,8 @@ RawVolume read_slices_in_parallel(const std::string& dir, const std::vector<std:
       },
       /*threaded=*/true, /*grain=*/1);
   for (std::size_t s = 0; s < files.size(); ++s)
-    if (!problems[s].empty()) throw IoError(files[s], "cannot read DICOM slice: " + problems[s]);
+    if (!problems[s].empty())
+      throw IoError(files[s], own[s] ? problems[s] : "cannot read DICOM slice: " + problems[s]);
   return out;
 }
 
@@ -321,6 +412,8 @@ RawVolume itk_read_dicom_folder(const std::string& dir) {
   }
   const auto files = names->GetFileNames(uids.front());
   if (files.empty()) throw IoError(dir, "DICOM series has no readable slices");
+  check_no_slice_left_out(dir, uids.front(), files);
+  if (files.size() == 1) check_dicom_slice_bytes(files.front());
   auto gdcm = itk::GDCMImageIO::New();
   auto reader = itk::ImageSeriesReader<FloatImage>::New();
   reader->SetImageIO(gdcm);

@@ -3,12 +3,16 @@
 
 #include <zlib.h>
 
+#include <algorithm>
 #include <bit>
+#include <cctype>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <istream>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include <fmt/format.h>
@@ -190,6 +194,55 @@ NiftiVoxelScan check_nifti_voxels(const std::string& path, const NiftiHeader& he
   return scan;
 }
 
+namespace {
+
+/// What inflating a stream gave: the bytes produced (at most the wanted count) and, when the
+/// stream is damaged, zlib's word for it.
+struct Inflated {
+  std::uint64_t produced = 0;
+  std::string damage;
+};
+
+/// Inflates @p in from its current position (window bits as zlib's inflateInit2: 15 zlib,
+/// 31 gzip) until @p wanted bytes came out, the stream ended or the input ran out.
+Inflated inflate_up_to(std::istream& in, int window_bits, std::uint64_t wanted, const std::string& path) {
+  z_stream z{};
+  if (inflateInit2(&z, window_bits) != Z_OK) throw IoError(path, "zlib could not start");
+  std::vector<unsigned char> input(std::size_t(1) << 16), output(std::size_t(1) << 18);
+  Inflated r;
+  int rc = Z_OK;
+  while (r.produced < wanted && rc != Z_STREAM_END) {
+    if (z.avail_in == 0) {
+      in.read(reinterpret_cast<char*>(input.data()), static_cast<std::streamsize>(input.size()));
+      z.next_in = input.data();
+      z.avail_in = static_cast<uInt>(in.gcount());
+      if (z.avail_in == 0) break;  // the file ends
+    }
+    z.next_out = output.data();
+    z.avail_out = static_cast<uInt>(std::min<std::uint64_t>(output.size(), wanted - r.produced));
+    rc = inflate(&z, Z_NO_FLUSH);
+    r.produced += static_cast<std::uint64_t>(z.next_out - output.data());
+    if (rc != Z_OK && rc != Z_STREAM_END) break;
+  }
+  if (rc != Z_OK && rc != Z_STREAM_END) r.damage = z.msg ? z.msg : (rc == Z_DATA_ERROR ? "invalid data" : "");
+  inflateEnd(&z);
+  return r;
+}
+
+std::string lower(std::string s) {
+  for (auto& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+std::string trimmed(std::string_view s) {
+  const auto b = s.find_first_not_of(" \t\r");
+  if (b == std::string_view::npos) return {};
+  const auto e = s.find_last_not_of(" \t\r");
+  return std::string(s.substr(b, e - b + 1));
+}
+
+}  // namespace
+
 void check_meta_zlib_voxels(const std::string& path, std::uint64_t voxel_bytes) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError(path, "cannot open for reading");
@@ -202,31 +255,92 @@ void check_meta_zlib_voxels(const std::string& path, std::uint64_t voxel_bytes) 
   if (eol == std::string::npos) throw IoError(path, "no ElementDataFile line in the first 64 KiB of the header");
   in.clear();
   in.seekg(static_cast<std::streamoff>(eol + 1));
-  z_stream z{};
-  if (inflateInit(&z) != Z_OK) throw IoError(path, "zlib could not start");
-  std::vector<unsigned char> input(std::size_t(1) << 16), output(std::size_t(1) << 18);
-  std::uint64_t produced = 0;
-  int rc = Z_OK;
-  while (produced < voxel_bytes && rc != Z_STREAM_END) {
-    if (z.avail_in == 0) {
-      in.read(reinterpret_cast<char*>(input.data()), static_cast<std::streamsize>(input.size()));
-      z.next_in = input.data();
-      z.avail_in = static_cast<uInt>(in.gcount());
-      if (z.avail_in == 0) break;  // the file ends
-    }
-    z.next_out = output.data();
-    z.avail_out = static_cast<uInt>(std::min<std::uint64_t>(output.size(), voxel_bytes - produced));
-    rc = inflate(&z, Z_NO_FLUSH);
-    produced += static_cast<std::uint64_t>(z.next_out - output.data());
-    if (rc != Z_OK && rc != Z_STREAM_END) break;
-  }
-  const std::string why = z.msg ? z.msg : (rc == Z_DATA_ERROR ? "invalid data" : "");
-  inflateEnd(&z);
-  if (produced < voxel_bytes)
+  const Inflated r = inflate_up_to(in, 15, voxel_bytes, path);
+  if (r.produced < voxel_bytes)
     throw IoError(path, fmt::format("compressed voxel data {} after {} of the {} bytes its header declares "
                                     "(truncated?)",
-                                    why.empty() ? std::string("ends") : "is damaged (" + why + ")", produced,
-                                    voxel_bytes));
+                                    r.damage.empty() ? std::string("ends") : "is damaged (" + r.damage + ")",
+                                    r.produced, voxel_bytes));
+}
+
+std::optional<DetachedData> nrrd_detached_data(const std::string& header_path) {
+  std::ifstream in(header_path, std::ios::binary);
+  if (!in) return std::nullopt;
+  std::string head(std::size_t(1) << 16, '\0');
+  in.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<std::size_t>(in.gcount()));
+  std::optional<std::string> file;
+  std::string encoding = "raw";
+  std::int64_t skip = 0;
+  std::size_t start = 0;
+  while (start < head.size()) {
+    const auto eol = head.find('\n', start);
+    if (eol == std::string::npos) break;  // a header line cut at 64 KiB: left to the reader
+    const std::string line = trimmed(std::string_view(head).substr(start, eol - start));
+    start = eol + 1;
+    if (line.empty()) break;  // the header ends
+    if (line[0] == '#') continue;
+    const auto colon = line.find(':');
+    if (colon == std::string::npos || line.compare(colon, 2, ":=") == 0) continue;  // magic, key/value pairs
+    const std::string field = lower(trimmed(std::string_view(line).substr(0, colon)));
+    const std::string value = trimmed(std::string_view(line).substr(colon + 1));
+    if (field == "data file" || field == "datafile") file = value;
+    else if (field == "encoding") encoding = lower(value);
+    else if (field == "byte skip" || field == "byteskip") {
+      try {
+        skip = std::stoll(value);
+      } catch (const std::exception&) {
+        return std::nullopt;  // the reader words its own error
+      }
+    }
+  }
+  if (!file || file->empty() || file->rfind("LIST", 0) == 0 || file->find(' ') != std::string::npos ||
+      file->find('%') != std::string::npos)
+    return std::nullopt;
+  DetachedData d;
+  if (encoding == "raw") d.encoding = DataEncoding::Raw;
+  else if (encoding == "gzip" || encoding == "gz") d.encoding = DataEncoding::Gzip;
+  else return std::nullopt;
+  std::filesystem::path p(*file);
+  if (p.is_relative()) p = std::filesystem::path(header_path).parent_path() / p;
+  d.file = p.string();
+  d.skip_bytes = skip;
+  return d;
+}
+
+void check_detached_file(const std::string& header_path, const DetachedData& data) {
+  std::error_code ec;
+  const auto status = std::filesystem::status(data.file, ec);
+  if (!std::filesystem::exists(status))
+    throw IoError(header_path, fmt::format("its data file '{}' does not exist", data.file));
+  if (!std::filesystem::is_regular_file(status))
+    throw IoError(header_path, fmt::format("its data file '{}' is not a regular file", data.file));
+}
+
+void check_detached_voxels(const std::string& header_path, const DetachedData& data, std::uint64_t voxel_bytes) {
+  check_detached_file(header_path, data);
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(data.file, ec);
+  if (ec) throw IoError(header_path, fmt::format("cannot read the size of its data file '{}'", data.file));
+  if (data.encoding == DataEncoding::Raw) {
+    const std::uint64_t skip = data.skip_bytes > 0 ? static_cast<std::uint64_t>(data.skip_bytes) : 0;
+    const std::uint64_t needed = skip > UINT64_MAX - voxel_bytes ? UINT64_MAX : skip + voxel_bytes;
+    if (size < needed)
+      throw IoError(header_path, fmt::format("data file '{}' has {} bytes, too few for the {} bytes of voxels the header "
+                                             "declares{} (truncated?)",
+                                             data.file, size, voxel_bytes,
+                                             skip > 0 ? fmt::format(" after {} skipped", skip) : std::string()));
+    return;
+  }
+  std::ifstream in(data.file, std::ios::binary);
+  if (!in) throw IoError(header_path, fmt::format("cannot open its data file '{}'", data.file));
+  if (data.skip_bytes > 0) in.seekg(static_cast<std::streamoff>(data.skip_bytes));
+  const Inflated r = inflate_up_to(in, data.encoding == DataEncoding::Gzip ? 15 + 16 : 15, voxel_bytes, header_path);
+  if (r.produced < voxel_bytes)
+    throw IoError(header_path, fmt::format("compressed data file '{}' {} after {} of the {} bytes of voxels the header "
+                                           "declares (truncated?)",
+                                           data.file, r.damage.empty() ? std::string("ends") : "is damaged (" + r.damage + ")",
+                                           r.produced, voxel_bytes));
 }
 
 }  // namespace ido::io::detail

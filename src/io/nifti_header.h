@@ -8,6 +8,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -65,5 +66,33 @@ NiftiVoxelScan check_nifti_voxels(const std::string& path, const NiftiHeader& he
 /// starts after the ElementDataFile line, is inflated a few hundred KiB at a time up to
 /// @p voxel_bytes. @throws ido::IoError naming @p path when it is damaged or holds fewer.
 void check_meta_zlib_voxels(const std::string& path, std::uint64_t voxel_bytes);
+
+/// How the voxels of a detached data file are stored.
+enum class DataEncoding { Raw, Zlib, Gzip };
+
+/// The voxel file of a header/data pair (a MetaImage .mhd with ElementDataFile = x.raw, an
+/// NRRD .nhdr with "data file: x.raw"), as its header names it.
+struct DetachedData {
+  std::string file;                        ///< resolved against the header's folder
+  DataEncoding encoding = DataEncoding::Raw;
+  std::int64_t skip_bytes = 0;             ///< bytes before the voxels; -1: the voxels end the file
+};
+
+/// Reads the data file, encoding and byte skip of an NRRD header (.nhdr, or a .nrrd naming a
+/// data file), or nothing when its voxels follow the header in the same file, are split over
+/// several files (LIST, a format string) or use an encoding left to the reader (ascii, hex,
+/// bzip2). Only the header text is read (up to its blank line, at most 64 KiB).
+[[nodiscard]] std::optional<DetachedData> nrrd_detached_data(const std::string& header_path);
+
+/// Checks that the data file of a header/data pair exists and is a regular file (before the
+/// reader, which would word it as a bad header). @throws ido::IoError naming @p header_path.
+void check_detached_file(const std::string& header_path, const DetachedData& data);
+
+/// Checks the data file of a header/data pair before ITK reads it (ITK reads a short raw
+/// file or a short compressed stream with the missing voxels left as whatever the buffer
+/// held, or fails with its internals): it exists, is a regular file, and holds @p voxel_bytes
+/// after the skip (raw), or its stream inflates to at least @p voxel_bytes (zlib, gzip).
+/// @throws ido::IoError naming @p header_path, the data file, the bytes found and declared.
+void check_detached_voxels(const std::string& header_path, const DetachedData& data, std::uint64_t voxel_bytes);
 
 }  // namespace ido::io::detail

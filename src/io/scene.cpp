@@ -16,6 +16,7 @@
 
 #include "ido/core/atomic_file.h"
 #include "ido/core/error.h"
+#include "ido/geometry/tet_quality.h"
 #include "ido/io/mesh_io.h"
 #include "ido/io/pvd.h"
 #include "ido/sim/diagnostics.h"
@@ -461,11 +462,24 @@ Scene parse_scene(std::string_view json_text, const std::string& source_name,
       throw IoError(source_name, "file holds no JSON (empty)");
     throw IoError(source_name, fmt::format("column {}: not valid JSON: {}", column, why),
                   FileLocation{line, std::nullopt});
+  } catch (const json::exception& e) {
+    // A number out of range ("[json.exception.out_of_range.406] number overflow parsing
+    // '1e4000'", found by fuzz_scene): nlohmann gives no position, so the line is that of the
+    // first occurrence of the number.
+    std::string why = e.what();
+    if (const auto close = why.find("] "); why.rfind("[json.exception.", 0) == 0 && close != std::string::npos)
+      why = why.substr(close + 2);
+    std::optional<std::int64_t> line;
+    if (const auto q0 = why.find('\''), q1 = why.rfind('\''); q0 != std::string::npos && q1 > q0 + 1)
+      if (const auto at = json_text.find(why.substr(q0 + 1, q1 - q0 - 1)); at != std::string_view::npos)
+        line = 1 + std::count(json_text.begin(), json_text.begin() + static_cast<std::ptrdiff_t>(at), '\n');
+    throw IoError(source_name, "not valid JSON: " + why, FileLocation{line, std::nullopt});
   }
   const Reader r(source_name);
   r.object(root, "", {"dt_s", "steps", "output_every", "integrator", "implicit", "gravity_mm_s2",
                       "damping", "planes", "bodies", "description"});
   Scene scene;
+  scene.source = source_name;
   scene.dt_s = r.positive(root, "", "dt_s");
   scene.steps = r.integer(root, "", "steps", std::nullopt, 1);
   if (scene.steps > 100'000'000) r.fail("/steps", "must be <= 100000000");
@@ -552,12 +566,87 @@ geometry::Field tensor_field(const std::vector<Mat3>& m) {
   return f;
 }
 
-}  // namespace
+/// Watches a run for divergence (run_scene's doc comment gives the rule).
+class DivergenceWatch {
+ public:
+  explicit DivergenceWatch(const Scene& scene) : m_scene(scene) {
+    const auto& world = scene.world;
+    const auto& p = world.particles();
+    m_start = p.positions();
+    m_coefficient_n.assign(p.size(), 0.0);
+    std::vector<Vec3> load(p.size(), Vec3::Zero());
+    for (const auto& l : world.external().point_loads) load[static_cast<std::size_t>(l.particle)] += l.force_n;
+    const double g = world.external().gravity_mm_s2.norm();
+    for (std::size_t i = 0; i < p.size(); ++i)
+      m_coefficient_n[i] = load[i].norm() + p.masses()[i] * g * sim::kKgMmPerS2ToNewton;
+    const auto e = sim::energies(world);
+    m_start_mj = e.kinetic_mj + e.elastic_total_mj();
+    constexpr double kFloorStrain = 1e-3;
+    for (const auto& body : scene.bodies) {
+      double volume_mm3 = 0.0;
+      for (const auto& t : body.rest_mesh.tets)
+        volume_mm3 += std::abs(geometry::tet_signed_volume(
+            body.rest_mesh.vertices[static_cast<std::size_t>(t[0])], body.rest_mesh.vertices[static_cast<std::size_t>(t[1])],
+            body.rest_mesh.vertices[static_cast<std::size_t>(t[2])], body.rest_mesh.vertices[static_cast<std::size_t>(t[3])]));
+      m_floor_mj += 0.5 * body.material.youngs_modulus_pa * sim::kPascalToNPerMm2 * kFloorStrain * kFloorStrain * volume_mm3;
+    }
+  }
 
-SceneRunResult run_scene(Scene& scene, const std::filesystem::path& out_dir, Progress* progress) {
+  /// After each step: every position and velocity finite.
+  void check_finite(std::int64_t step) const {
+    const auto& p = m_scene.world.particles();
+    for (std::size_t i = 0; i < p.size(); ++i)
+      if (!p.positions()[i].allFinite() || !p.velocities()[i].allFinite())
+        fail(step, fmt::format("particle {} has a non-finite {}", i,
+                               p.positions()[i].allFinite() ? "velocity" : "position"));
+  }
+
+  /// Before a sample or frame: the energy within its bound.
+  void check_energy(std::int64_t step, const sim::EnergyReport& e) const {
+    const double mech_mj = e.kinetic_mj + e.elastic_total_mj();
+    if (!std::isfinite(mech_mj) || !std::isfinite(e.gravitational_mj))
+      fail(step, "the energy is not finite");
+    const auto& p = m_scene.world.particles();
+    double work_mj = 0.0;
+    for (std::size_t i = 0; i < m_start.size(); ++i)
+      if (m_coefficient_n[i] > 0.0)
+        work_mj += m_coefficient_n[i] * ((p.positions()[i] - m_start[i]).norm() + p.velocities()[i].norm() * m_scene.dt_s);
+    const double bound_mj = m_start_mj + work_mj + m_floor_mj;
+    if (mech_mj > kDivergenceEnergyFactor * bound_mj)
+      fail(step, fmt::format("kinetic + elastic energy {:.3g} mJ is over {:g} times what the start state, loads and "
+                             "gravity can have given ({:.3g} mJ)",
+                             mech_mj, kDivergenceEnergyFactor, bound_mj));
+  }
+
+ private:
+  [[noreturn]] void fail(std::int64_t step, const std::string& cause) const {
+    throw InvalidInput(fmt::format("{}: simulation diverged at step {} of {} (t = {:.6g} s): {}; reduce dt_s (now {:g}) "
+                                   "or use implicit_euler",
+                                   m_scene.source.empty() ? std::string("scene") : m_scene.source, step, m_scene.steps,
+                                   m_scene.world.time_s(), cause, m_scene.dt_s));
+  }
+
+  const Scene& m_scene;
+  std::vector<Vec3> m_start;            ///< positions at the start (mm)
+  std::vector<double> m_coefficient_n;  ///< |Σ point loads| + m |g| per particle (N)
+  double m_start_mj = 0.0;
+  double m_floor_mj = 0.0;
+};
+
+/// Folders that create_directories(@p dir) would make, outermost first.
+std::vector<std::filesystem::path> missing_folders(const std::filesystem::path& dir) {
+  std::vector<std::filesystem::path> missing;
   std::error_code ec;
-  std::filesystem::create_directories(out_dir, ec);
-  if (ec) throw IoError(out_dir.string(), "cannot create the output folder: " + ec.message());
+  for (auto d = std::filesystem::absolute(dir, ec).lexically_normal(); !d.empty() && !std::filesystem::exists(d, ec);
+       d = d.parent_path()) {
+    missing.insert(missing.begin(), d);
+    if (d == d.parent_path()) break;
+  }
+  return missing;
+}
+
+/// The run itself; run_scene() commits or discards what it staged in @p batch.
+SceneRunResult run_steps(Scene& scene, const std::filesystem::path& out_dir, Progress* progress, FileBatch& batch) {
   auto& world = scene.world;
   // Diagnostic element models (no force) for bodies whose model has no elements.
   std::vector<std::unique_ptr<sim::CorotationalFem>> stress_models(scene.bodies.size());
@@ -618,22 +707,21 @@ SceneRunResult run_scene(Scene& scene, const std::filesystem::path& out_dir, Pro
     out.cell_fields["von_mises_pa"] = geometry::Field{1, vm};
     out.cell_fields["body"] = geometry::Field{1, body_id};
     const std::string name = fmt::format("frame_{:04d}.vtu", index);
-    write_tet_mesh(out_dir / name, out);
+    write_tet_mesh(batch.stage(out_dir / name), out);
     pvd.push_back({world.time_s(), name});
-    write_pvd(out_dir / "simulation.pvd", pvd);
   };
 
   SceneRunResult result;
   const std::int64_t energy_every = std::max<std::int64_t>(1, scene.steps / 2000);
-  auto sample = [&] {
-    const auto e = sim::energies(world);
+  auto sample = [&](const sim::EnergyReport& e) {
     result.time_s.push_back(world.time_s());
     result.kinetic_mj.push_back(e.kinetic_mj);
     result.elastic_mj.push_back(e.elastic_total_mj());
     result.gravitational_mj.push_back(e.gravitational_mj);
     result.total_mj.push_back(e.total_mj());
   };
-  sample();
+  const DivergenceWatch watch(scene);
+  sample(sim::energies(world));
   write_frame(result.frames++);
   const auto t_start = std::chrono::steady_clock::now();
   for (std::int64_t s = 1; s <= scene.steps; ++s) {
@@ -643,21 +731,26 @@ SceneRunResult run_scene(Scene& scene, const std::filesystem::path& out_dir, Pro
     const auto t1 = std::chrono::steady_clock::now();
     result.step_ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
     result.cg_iterations.push_back(world.last_step().cg_iterations);
-    for (std::size_t i = 0; i < world.particles().size(); ++i)
-      if (!world.particles().positions()[i].allFinite() || !world.particles().velocities()[i].allFinite())
-        throw Error(fmt::format("simulation diverged at step {} (non-finite position or velocity); reduce dt_s "
-                                "or use implicit_euler", s));
-    if (s % energy_every == 0 || s == scene.steps) sample();
-    if (s % scene.output_every == 0 || s == scene.steps) write_frame(result.frames++);
+    watch.check_finite(s);
+    const bool sample_now = s % energy_every == 0 || s == scene.steps;
+    const bool frame_now = s % scene.output_every == 0 || s == scene.steps;
+    if (sample_now || frame_now) {
+      // Checked before anything of this state is kept: a diverged state reaches no file.
+      const auto e = sim::energies(world);
+      watch.check_energy(s, e);
+      if (sample_now) sample(e);
+      if (frame_now) write_frame(result.frames++);
+    }
     report(progress, static_cast<double>(s) / static_cast<double>(scene.steps), "simulating");
   }
   result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
 
+  write_pvd(batch.stage(out_dir / "simulation.pvd"), pvd);
   std::string csv = "time_s,kinetic_mj,elastic_mj,gravitational_mj,total_mj\n";
   for (std::size_t i = 0; i < result.time_s.size(); ++i)
     csv += fmt::format("{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}\n", result.time_s[i], result.kinetic_mj[i],
                        result.elastic_mj[i], result.gravitational_mj[i], result.total_mj[i]);
-  write_file_atomically(out_dir / "energy.csv", [&](std::ostream& os) { os << csv; }, false);
+  write_file_atomically(batch.stage(out_dir / "energy.csv"), [&](std::ostream& os) { os << csv; }, false);
 
   json report_json;
   report_json["steps"] = scene.steps;
@@ -690,8 +783,30 @@ SceneRunResult run_scene(Scene& scene, const std::filesystem::path& out_dir, Pro
       {"mean", result.cg_iterations.empty() ? 0.0 : cg_sum / static_cast<double>(result.cg_iterations.size())},
       {"max", cg_max},
       {"total", cg_sum}};
-  write_file_atomically(out_dir / "report.json", [&](std::ostream& os) { os << report_json.dump(2) << "\n"; }, false);
+  write_file_atomically(batch.stage(out_dir / "report.json"), [&](std::ostream& os) { os << report_json.dump(2) << "\n"; },
+                        false);
   return result;
+}
+
+}  // namespace
+
+SceneRunResult run_scene(Scene& scene, const std::filesystem::path& out_dir, Progress* progress,
+                         FileBatch* outputs) {
+  const auto created = missing_folders(out_dir);
+  std::error_code ec;
+  std::filesystem::create_directories(out_dir, ec);
+  if (ec) throw IoError(out_dir.string(), "cannot create the output folder: " + ec.message());
+  FileBatch own_batch;
+  FileBatch& batch = outputs ? *outputs : own_batch;
+  try {
+    auto result = run_steps(scene, out_dir, progress, batch);
+    if (!outputs) batch.commit();
+    return result;
+  } catch (...) {
+    batch.discard();
+    for (auto it = created.rbegin(); it != created.rend(); ++it) std::filesystem::remove(*it, ec);  // only if empty
+    throw;
+  }
 }
 
 }  // namespace ido::io

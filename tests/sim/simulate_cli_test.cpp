@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 // `ido simulate` through the built tool: outputs, physics of a free fall, and every bad-scene
 // case of the issue (error names the JSON path, exit code 2).
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -170,6 +172,54 @@ TEST(SimulateCli, MalformedJsonIsAnIoError) {
   const auto r = test::run_tool("simulate " + (dir / "scene.json").string() + " -o " + (dir / "out").string());
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_NE(r.err.find("scene.json"), std::string::npos) << r.err;
+}
+
+// A run that diverges stops before its bad state reaches a file (issue 30). A 10-mm cube
+// clamped at its base, sagging under gravity, with stiffness damping (so that explicit Euler
+// has a stable step): its limit lies between 0.21 and 0.22 ms (without the check, 0.22 ms
+// runs to infinite energy at step 2309 and 0.25 ms at step 1425; 0.21 ms settles). Far beyond
+// it (10 ms, energy x 1e4 within 4 steps) and just beyond it (0.22 ms, slow growth) the tool
+// exits 2 with one line naming the scene, the step and the cause, and leaves nothing: no
+// frame 0, no .pvd, no output folder. Just below it (0.2 ms) every output is written.
+TEST(SimulateCli, DivergingRunStopsBeforeWritingAndSaysWhere) {
+  auto scene_at = [](double dt_s) {
+    json scene = json::parse(R"({
+      "steps": 4000, "output_every": 100, "integrator": "explicit_euler",
+      "gravity_mm_s2": [0, 0, -9806.65],
+      "damping": {"rayleigh_stiffness_s": 0.002},
+      "bodies": [{
+        "mesh": {"generator": "cube", "edge_mm": 10, "cells": 2},
+        "model": "corotational_fem",
+        "material": {"youngs_modulus_pa": 1e4, "poisson_ratio": 0.3, "density_kg_m3": 1000},
+        "fixed": [{"box_min_mm": [-6, -6, -6], "box_max_mm": [6, 6, -4.9]}]
+      }]})");
+    scene["dt_s"] = dt_s;
+    return scene;
+  };
+  for (const double dt_s : {0.01, 0.00022}) {
+    SCOPED_TRACE(dt_s);
+    const auto dir = test::scratch_dir("simulate_diverging_" + std::to_string(dt_s));
+    std::ofstream(dir / "scene.json") << scene_at(dt_s).dump(2);
+    const auto out = dir / "out";
+    const auto r = test::run_tool("simulate " + (dir / "scene.json").string() + " -o " + out.string());
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_EQ(r.err.rfind("ido: error: " + (dir / "scene.json").string() + ": simulation diverged at step ", 0), 0u)
+        << r.err;
+    EXPECT_NE(r.err.find(" of 4000 (t = "), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("kinetic + elastic energy"), std::string::npos) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(out)) << "outputs left by a diverged run";
+    EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir), std::filesystem::directory_iterator()), 1);
+  }
+  const auto dir = test::scratch_dir("simulate_below_limit");
+  std::ofstream(dir / "scene.json") << scene_at(0.0002).dump(2);
+  const auto r = test::run_tool("-q simulate " + (dir / "scene.json").string() + " -o " + (dir / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const char* file : {"frame_0000.vtu", "frame_0040.vtu", "simulation.pvd", "energy.csv", "energy.png", "report.json"})
+    EXPECT_TRUE(std::filesystem::exists(dir / "out" / file)) << file;
+  // It settles: the final elastic energy is the static sag's, far below the bound.
+  const auto report = json::parse(read_text(dir / "out" / "report.json"));
+  EXPECT_LT(report["final_energy_mj"]["kinetic"].get<double>(), 1e-9);
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // `ido render` end to end: the built tool reads files and writes a PNG.
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <set>
@@ -10,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "ido/geometry/primitives.h"
+#include "ido/geometry/tet_mesh.h"
 #include "ido/io/mesh_io.h"
 #include "ido/io/volume_io.h"
 #include "support/png_read.h"
@@ -80,6 +82,38 @@ TEST(RenderCli, BadInputExitsWithTwo) {
   r = test::run_tool("render " + (dir / "notes.txt").string() + " -o " + (dir / "x.png").string());
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_FALSE(std::filesystem::exists(dir / "x.png"));
+}
+
+// A simulation frame may hold inverted tetrahedra, and `ido render` draws it (issue 30).
+// Swapping two vertices of a tetrahedron inverts it without moving anything, so the picture
+// covers exactly the pixels of the upright mesh's; a tetrahedron whose apex went through its
+// base (as in a diverging frame) is drawn too.
+TEST(RenderCli, InvertedTetrahedraAreDrawn) {
+  const auto dir = test::scratch_dir("render_cli_inverted");
+  geometry::TetMesh upright;
+  upright.vertices = {Vec3(0, 0, 0), Vec3(10, 0, 0), Vec3(0, 10, 0), Vec3(0, 0, 10), Vec3(10, 10, 10)};
+  upright.tets = {{0, 1, 2, 3}, {1, 2, 4, 3}};
+  geometry::TetMesh inverted = upright;
+  std::swap(inverted.tets[0][1], inverted.tets[0][2]);
+  geometry::TetMesh through = upright;
+  through.vertices[3] = Vec3(2, 2, -6);  // the first tetrahedron's apex below its base
+  auto covered = [&](const geometry::TetMesh& mesh, const std::string& name) {
+    io::write_tet_mesh(dir / (name + ".vtu"), mesh);
+    const auto r = test::run_tool("render " + (dir / (name + ".vtu")).string() + " -o " +
+                                  (dir / (name + ".png")).string() + " --size 120x90 --camera 30,20");
+    EXPECT_EQ(r.exit_code, 0) << name << ": " << r.err;
+    std::vector<bool> mask;
+    if (r.exit_code != 0) return mask;
+    const test::Png png = test::read_png(dir / (name + ".png"));
+    for (int y = 0; y < png.h; ++y)
+      for (int x = 0; x < png.w; ++x) mask.push_back(!png.background(x, y));
+    return mask;
+  };
+  const auto a = covered(upright, "upright"), b = covered(inverted, "inverted"), c = covered(through, "through");
+  ASSERT_EQ(a.size(), 120u * 90u);
+  EXPECT_GT(std::count(a.begin(), a.end(), true), 1000);
+  EXPECT_EQ(a, b);
+  EXPECT_GT(std::count(c.begin(), c.end(), true), 1000);
 }
 
 }  // namespace

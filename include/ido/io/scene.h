@@ -7,6 +7,7 @@
 #include <string_view>
 #include <vector>
 
+#include "ido/core/atomic_file.h"
 #include "ido/core/progress.h"
 #include "ido/geometry/tet_mesh.h"
 #include "ido/sim/fem_common.h"
@@ -29,6 +30,7 @@ struct SceneBody {
 
 /// A simulation scene (docs/scene.md): a world ready to step plus the run settings.
 struct Scene {
+  std::string source;               ///< the scene file's name, prefixing run-time messages
   sim::World world;
   std::vector<SceneBody> bodies;
   double dt_s = 0.0;
@@ -56,11 +58,29 @@ struct SceneRunResult {
   double wall_time_s = 0.0;
 };
 
+/// How far the bodies' kinetic + elastic energy may exceed what the start state, the loads and
+/// gravity can have given them before run_scene() calls the run diverged (see run_scene).
+inline constexpr double kDivergenceEnergyFactor = 10.0;
+
 /// Runs the scene's steps, writing into @p out_dir (created if missing): frame_NNNN.vtu per
 /// output frame (point data displacement_mm, velocity_mm_s; cell data green_strain,
 /// cauchy_stress_pa, von_mises_pa, body), simulation.pvd, energy.csv and report.json.
-/// Reports progress and honours cancellation (ido::Cancelled).
+/// The outputs are written all or none: they are staged beside their targets and put in place
+/// when the run has ended, by run_scene itself, or by the caller when @p outputs is given (the
+/// caller may then stage more files in the same batch and commit them together).
+///
+/// A diverging run stops before its bad state reaches a file: after every step the positions
+/// and velocities must be finite, and before every energy sample and frame the bodies' kinetic
+/// + elastic energy must stay within kDivergenceEnergyFactor times an upper bound of what the
+/// run can have received: the start energy, plus Σ (|loads on i| + m_i |g|)·(|x_i − x_i⁰| +
+/// |v_i| dt) for the work of point loads, tractions and gravity, plus a floor of the energy
+/// that strains every body by 0.1 % (so that rounding noise of a body at rest is not
+/// "divergence"). A stable integrator keeps to the energy balance (explicit schemes gain a
+/// little), so only a run whose state grows without bound is stopped.
+/// @throws ido::InvalidInput "<scene>: simulation diverged at step N of M (t = … s): <cause>;
+/// reduce dt_s or use implicit_euler" — nothing of the run is left written (the batch is
+/// discarded and a folder the run created is removed); ido::Cancelled, likewise.
 SceneRunResult run_scene(Scene& scene, const std::filesystem::path& out_dir,
-                         Progress* progress = nullptr);
+                         Progress* progress = nullptr, FileBatch* outputs = nullptr);
 
 }  // namespace ido::io

@@ -163,3 +163,21 @@ w("zlib_bomb.vtu", ("""<?xml version="1.0"?>
 ZMHA = "ObjectType = Image\nNDims = 3\nDimSize = 4 4 4\nElementType = MET_SHORT\nCompressedData = True\nElementDataFile = LOCAL\n"
 w("damaged_zlib.mha", ZMHA.encode() + b"this is not a zlib stream")
 w("short_zlib.mha", ZMHA.encode() + zlib.compress(bytes(range(100))))
+# Header/data pairs whose data file holds fewer bytes than the header declares (ITK reads a
+# short one with whatever its buffer held, or fails with its internals), or is missing: the
+# header is refused naming its data file. The data files are not catalogued themselves.
+DETACHED_MHD = "ObjectType = Image\nNDims = 3\nDimSize = 4 4 4\nElementSpacing = 1 1 1\nElementType = MET_FLOAT\n"
+w("short_data.raw", b"\0" * 100)
+w("short_data.mhd", DETACHED_MHD + "ElementDataFile = short_data.raw\n")
+w("short_zlib_data.zraw", zlib.compress(b"\0" * 100))
+w("short_zlib_data.mhd", DETACHED_MHD + "CompressedData = True\nElementDataFile = short_zlib_data.zraw\n")
+DETACHED_NHDR = "NRRD0004\ntype: float\ndimension: 3\nsizes: 4 4 4\nspacings: 1 1 1\nendian: little\n"
+w("short_data.nhdr", DETACHED_NHDR + "encoding: raw\ndata file: short_data.raw\n")
+w("short_gzip_data.raw.gz", gzip.compress(b"\0" * 100, mtime=0))
+w("short_gzip_data.nhdr", DETACHED_NHDR + "encoding: gzip\ndata file: short_gzip_data.raw.gz\n")
+w("missing_data.nhdr", DETACHED_NHDR + "encoding: raw\ndata file: no_such_data.raw\n")
+# DICOM series (folders) with a slice whose pixel data is missing or cut short are not made
+# here (no DICOM writer in Python's standard library): dicom_missing_pixels/ and
+# dicom_short_pixels/ hold a 4-slice 4x3 int16 series written by ITK's GDCMImageIO
+# (tests/io/dicom_writer.cpp), with s1.dcm cut before its (7FE0,0010) element, or 6 bytes
+# into the end of its 24 pixel bytes.
