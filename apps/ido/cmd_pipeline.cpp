@@ -346,7 +346,7 @@ void run(const Options& o, const GlobalOptions& g) {
                           o.vessel_outside_level);
   const segment::Organ vessel_organ = parse_organ_option(o.vessel_organ, "--vessel-organ");
   if (vessel_organ == segment::Organ::Vertebra) throw InvalidInput("--vessel-organ: vertebra is for --bone-seed, not a vessel");
-  std::optional<std::array<Vec3, 2>> roi;
+  std::optional<geometry::Aabb> roi;
   if (!o.roi.empty()) roi = parse_roi(o.roi);
   const fs::path dir = o.out_dir;
   std::error_code ec;
@@ -385,8 +385,8 @@ void run(const Options& o, const GlobalOptions& g) {
     entry["options"] = {{"organ", bone ? "vertebra" : o.vessel_organ},
                         {"edge_reach_voxels", bo.edge_reach_voxels},
                         {"outside_level", bo.outside_level ? json(*bo.outside_level) : json(nullptr)},
-                        {"roi_mm", roi ? json::array({{(*roi)[0].x(), (*roi)[0].y(), (*roi)[0].z()},
-                                                      {(*roi)[1].x(), (*roi)[1].y(), (*roi)[1].z()}})
+                        {"roi_mm", roi ? json::array({{roi->min.x(), roi->min.y(), roi->min.z()},
+                                                      {roi->max.x(), roi->max.y(), roi->max.z()}})
                                        : json(nullptr)}};
     entry["balloon"] = balloon_json(organs.back().balloon.report);
     entry["surface_checks"] = mesh_check_json(geometry::check_mesh(organs.back().balloon.surface));

@@ -63,7 +63,7 @@ BalloonOptions balloon_options(const SegmentArgs& a) {
     const Vec3 lo(r[0], r[1], r[2]), hi(r[3], r[4], r[5]);
     if (!lo.allFinite() || !hi.allFinite() || (lo.array() >= hi.array()).any())
       throw InvalidInput("roi: expected (x0, y0, z0, x1, y1, z1) in mm with each minimum below its maximum");
-    bo.roi_mm = std::array<Vec3, 2>{lo, hi};
+    bo.roi_mm = geometry::Aabb{lo, hi};
   }
   return bo;
 }

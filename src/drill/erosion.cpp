@@ -344,14 +344,14 @@ void Eroder::start_sphere(const TetHierarchy& hierarchy, const Sphere& sphere) {
     m_epoch = 1;
   }
   m_candidates.clear();
-  const geometry::Box3 box{m_centre - Vec3::Constant(m_radius), m_centre + Vec3::Constant(m_radius)};
+  const geometry::Aabb box{m_centre - Vec3::Constant(m_radius), m_centre + Vec3::Constant(m_radius)};
   hierarchy.root_hash().for_each_in_box(box, [&](std::int32_t r) {
     if (static_cast<std::size_t>(r) >= n) return;
     auto& s = m_stamp[static_cast<std::size_t>(r)];
     if (s == m_epoch) return;
     s = m_epoch;
     const auto& rb = hierarchy.root_box(static_cast<std::size_t>(r));
-    if ((rb.lo.array() > box.hi.array()).any() || (rb.hi.array() < box.lo.array()).any()) return;
+    if (!rb.overlaps(box)) return;
     m_candidates.push_back(static_cast<std::uint32_t>(r));
   });
   std::sort(m_candidates.begin(), m_candidates.end());

@@ -160,11 +160,10 @@ void TetHierarchy::update_root_geometry() {
     for (int k = 0; k < 3; ++k) e.col(k) = m_vertices[static_cast<std::size_t>(t[static_cast<std::size_t>(k + 1)])] - x0;
     const double vol = e.determinant() / 6.0;
     double diam = 0.0;
-    geometry::Box3 box{x0, x0};
+    geometry::Aabb box{x0, x0};
     for (int i = 0; i < 4; ++i) {
       const Vec3& xi = m_vertices[static_cast<std::size_t>(t[static_cast<std::size_t>(i)])];
-      box.lo = box.lo.cwiseMin(xi);
-      box.hi = box.hi.cwiseMax(xi);
+      box.extend(xi);
       for (int j = i + 1; j < 4; ++j) diam = std::max(diam, (xi - m_vertices[static_cast<std::size_t>(t[static_cast<std::size_t>(j)])]).norm());
     }
     if (!(vol > 1e-12 * diam * diam * diam)) {
@@ -175,13 +174,9 @@ void TetHierarchy::update_root_geometry() {
     m_root_diameter[r] = diam;
     m_root_box[r] = box;
     m_total_volume += vol;
-    if (r == 0) m_mesh_box = box;
-    m_mesh_box.lo = m_mesh_box.lo.cwiseMin(box.lo);
-    m_mesh_box.hi = m_mesh_box.hi.cwiseMax(box.hi);
+    m_mesh_box.extend(box);
   }
-  const Vec3 slack = Vec3::Constant(kBoxSlack * (m_mesh_box.hi - m_mesh_box.lo).norm());
-  m_mesh_box.lo -= slack;
-  m_mesh_box.hi += slack;
+  m_mesh_box = m_mesh_box.inflated(kBoxSlack * m_mesh_box.diagonal());
   m_hash = geometry::SpatialHash(m_root_box, m_hash_cell);
 }
 
@@ -489,10 +484,10 @@ std::array<double, 4> TetHierarchy::root_barycentric(std::size_t r, const Vec3& 
 }
 
 bool TetHierarchy::outside_root_box(std::size_t r, const Vec3& p_mm) const noexcept {
-  const geometry::Box3& b = m_root_box[r];
+  const geometry::Aabb& b = m_root_box[r];
   const double slack = kBoxSlack * m_root_diameter[r];
-  return p_mm.x() < b.lo.x() - slack || p_mm.y() < b.lo.y() - slack || p_mm.z() < b.lo.z() - slack ||
-         p_mm.x() > b.hi.x() + slack || p_mm.y() > b.hi.y() + slack || p_mm.z() > b.hi.z() + slack;
+  return p_mm.x() < b.min.x() - slack || p_mm.y() < b.min.y() - slack || p_mm.z() < b.min.z() - slack ||
+         p_mm.x() > b.max.x() + slack || p_mm.y() > b.max.y() + slack || p_mm.z() > b.max.z() + slack;
 }
 
 Location TetHierarchy::locate(const Vec3& p_mm) const noexcept {
@@ -500,7 +495,7 @@ Location TetHierarchy::locate(const Vec3& p_mm) const noexcept {
   // Cheap rejections before any barycentric test: a point outside the mesh's box (air
   // beyond the block) needs no hash look-up, and a candidate root whose box does not hold
   // the point cannot hold it.
-  if ((p_mm.array() < m_mesh_box.lo.array()).any() || (p_mm.array() > m_mesh_box.hi.array()).any()) return loc;
+  if (!m_mesh_box.contains(p_mm)) return loc;
   std::int32_t best_root = -1;
   double best_min = -1e-12;
   std::array<double, 4> best_lambda{};

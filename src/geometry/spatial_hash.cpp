@@ -24,7 +24,7 @@ std::size_t SpatialHash::next_prime(std::size_t n) noexcept {
   }
 }
 
-SpatialHash::SpatialHash(std::span<const Box3> boxes, double cell_size_mm) {
+SpatialHash::SpatialHash(std::span<const Aabb> boxes, double cell_size_mm) {
   if (!(cell_size_mm > 0.0) || !std::isfinite(cell_size_mm)) {
     throw InvalidInput("spatial hash: cell size must be positive and finite");
   }
@@ -32,13 +32,13 @@ SpatialHash::SpatialHash(std::span<const Box3> boxes, double cell_size_mm) {
   m_inv_cell = 1.0 / cell_size_mm;
   std::size_t entries = 0;
   for (std::size_t i = 0; i < boxes.size(); ++i) {
-    const Box3& b = boxes[i];
-    if (!b.lo.allFinite() || !b.hi.allFinite()) {
+    const Aabb& b = boxes[i];
+    if (!b.min.allFinite() || !b.max.allFinite()) {
       throw InvalidInput("spatial hash: box " + std::to_string(i) + " is not finite");
     }
     std::size_t cells = 1;
     for (int a = 0; a < 3; ++a) {
-      cells *= static_cast<std::size_t>(cell_coordinate(b.hi[a]) - cell_coordinate(b.lo[a]) + 1);
+      cells *= static_cast<std::size_t>(cell_coordinate(b.max[a]) - cell_coordinate(b.min[a]) + 1);
     }
     entries += cells;
   }
@@ -47,14 +47,14 @@ SpatialHash::SpatialHash(std::span<const Box3> boxes, double cell_size_mm) {
   }
   const std::size_t n = next_prime(std::max<std::size_t>(2 * entries, 2));
   m_offsets.assign(n + 1, 0);
-  auto for_cells = [&](const Box3& b, auto&& f) {
-    for (std::int64_t i = cell_coordinate(b.lo.x()); i <= cell_coordinate(b.hi.x()); ++i)
-      for (std::int64_t j = cell_coordinate(b.lo.y()); j <= cell_coordinate(b.hi.y()); ++j)
-        for (std::int64_t k = cell_coordinate(b.lo.z()); k <= cell_coordinate(b.hi.z()); ++k) {
+  auto for_cells = [&](const Aabb& b, auto&& f) {
+    for (std::int64_t i = cell_coordinate(b.min.x()); i <= cell_coordinate(b.max.x()); ++i)
+      for (std::int64_t j = cell_coordinate(b.min.y()); j <= cell_coordinate(b.max.y()); ++j)
+        for (std::int64_t k = cell_coordinate(b.min.z()); k <= cell_coordinate(b.max.z()); ++k) {
           f(static_cast<std::size_t>(hash(i, j, k) % n));
         }
   };
-  for (const Box3& b : boxes) for_cells(b, [&](std::size_t bk) { ++m_offsets[bk + 1]; });
+  for (const Aabb& b : boxes) for_cells(b, [&](std::size_t bk) { ++m_offsets[bk + 1]; });
   for (std::size_t b = 0; b < n; ++b) m_offsets[b + 1] += m_offsets[b];
   m_items.assign(entries, -1);
   std::vector<std::uint32_t> fill(m_offsets.begin(), m_offsets.end() - 1);

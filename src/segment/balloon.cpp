@@ -180,7 +180,7 @@ struct Balloon::State {
     return v;
   }
   bool inside_roi(const Vec3& p) const {
-    if (opt.roi_mm && ((p.array() < (*opt.roi_mm)[0].array()).any() || (p.array() > (*opt.roi_mm)[1].array()).any()))
+    if (opt.roi_mm && !opt.roi_mm->contains(p))
       return false;
     const Vec3 idx = smoothed.world_to_index(p);
     for (int a = 0; a < 3; ++a)
@@ -644,7 +644,7 @@ Balloon::Balloon(const image::Volume<float>& ct, const std::vector<Vec3>& seeds_
     throw InvalidInput("balloon: edge length and seed radius must be positive");
   if (options.sleep_steps < 0 || options.sleep_steps > 255 || !(options.sleep_move_voxels >= 0))
     throw InvalidInput("balloon: sleep_steps must be in [0, 255] and sleep_move_voxels non-negative");
-  if (options.roi_mm && ((*options.roi_mm)[0].array() >= (*options.roi_mm)[1].array()).any())
+  if (options.roi_mm && (options.roi_mm->min.array() >= options.roi_mm->max.array()).any())
     throw InvalidInput("balloon: the region of interest must have min < max on every axis");
   if (!(options.edge_reach_voxels >= 0) || !std::isfinite(options.edge_reach_voxels))
     throw InvalidInput("balloon: edge_reach_voxels must be 0 (no limit) or positive");

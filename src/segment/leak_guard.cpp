@@ -111,7 +111,7 @@ double disc_mean(const image::Volume<float>& v, const Vec3& p, const Vec3& axis,
 }  // namespace
 
 LeakGuard::LeakGuard(const image::Volume<float>& smoothed, const IntensityModel& model, const std::vector<Vec3>& seeds_mm,
-                     const LeakControlOptions& o, const std::optional<std::array<Vec3, 2>>& roi_mm, bool threaded) {
+                     const LeakControlOptions& o, const std::optional<geometry::Aabb>& roi_mm, bool threaded) {
   if (!(o.chamber_factor == 0 || (o.chamber_factor >= 1 && std::isfinite(o.chamber_factor))))
     throw InvalidInput("leak control: chamber_factor must be 0 (off) or a finite number >= 1");
   if (!(o.max_radius_mm > 0)) throw InvalidInput("leak control: max_radius_mm must be positive");
@@ -142,7 +142,7 @@ LeakGuard::LeakGuard(const image::Volume<float>& smoothed, const IntensityModel&
       if (!band[l]) continue;
       const Index3 c = g.ijk(l);
       const Vec3 p = smoothed.index_to_world(Vec3(double(c[0]), double(c[1]), double(c[2])));
-      if (((p.array() < (*roi_mm)[0].array()).any() || (p.array() > (*roi_mm)[1].array()).any())) band[l] = 0;
+      if (!roi_mm->contains(p)) band[l] = 0;
     }
   std::vector<std::size_t> starts;
   for (const Vec3& s : seeds_mm)

@@ -250,7 +250,7 @@ void Renderer::grow_bounds(const Vec3& p) {
   m_hi = m_hi.cwiseMax(p);
 }
 
-std::array<Vec3, 2> Renderer::bounds() const {
+geometry::Aabb Renderer::bounds() const {
   if (!(m_lo.array() <= m_hi.array()).all()) return {Vec3::Zero(), Vec3::Zero()};
   return {m_lo, m_hi};
 }

@@ -51,17 +51,13 @@ image::Volume<std::uint8_t> reference_mask(const image::Volume<float>& ref, bool
   return m;
 }
 
-std::array<Vec3, 2> grown_bbox(const image::Volume<std::uint8_t>& mask, double grow_mm) {
-  Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
+geometry::Aabb grown_bbox(const image::Volume<std::uint8_t>& mask, double grow_mm) {
+  geometry::Aabb b;
   for (std::int64_t k = 0; k < mask.size(2); ++k)
     for (std::int64_t j = 0; j < mask.size(1); ++j)
       for (std::int64_t i = 0; i < mask.size(0); ++i)
-        if (mask(i, j, k)) {
-          const Vec3 w = mask.index_to_world(Vec3(double(i), double(j), double(k)));
-          lo = lo.cwiseMin(w);
-          hi = hi.cwiseMax(w);
-        }
-  return {lo - Vec3::Constant(grow_mm), hi + Vec3::Constant(grow_mm)};
+        if (mask(i, j, k)) b.extend(mask.index_to_world(Vec3(double(i), double(j), double(k))));
+  return b.inflated(grow_mm);
 }
 
 // The outcome of one case. ctest runs every TEST in its own process (gtest_discover_tests),

@@ -252,7 +252,7 @@ class TetHierarchy {
   /// Spatial hash of the root tetrahedra.
   [[nodiscard]] const geometry::SpatialHash& root_hash() const noexcept { return m_hash; }
   /// Bounding box of root @p r (mm).
-  [[nodiscard]] const geometry::Box3& root_box(std::size_t r) const noexcept { return m_root_box[r]; }
+  [[nodiscard]] const geometry::Aabb& root_box(std::size_t r) const noexcept { return m_root_box[r]; }
 
   /// Live nodes: every root plus 8 per internal node.
   [[nodiscard]] std::size_t node_count() const noexcept { return m_roots.size() + 8 * m_internal; }
@@ -371,8 +371,8 @@ class TetHierarchy {
   std::vector<Mat3> m_root_inverse;   // barycentric map: (λ1, λ2, λ3) = M (p − x0)
   std::vector<double> m_root_volume;
   std::vector<double> m_root_diameter;
-  std::vector<geometry::Box3> m_root_box;
-  geometry::Box3 m_mesh_box;  // union of the root boxes, grown by kBoxSlack × its diagonal
+  std::vector<geometry::Aabb> m_root_box;
+  geometry::Aabb m_mesh_box;  // union of the root boxes, grown by kBoxSlack × its diagonal
   std::vector<float> m_density;
   double m_total_volume = 0.0;
   double m_mean_edge = 0.0;

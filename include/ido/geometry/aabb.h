@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <limits>
+#include <span>
 
 #include "ido/core/math.h"
 
@@ -17,6 +18,12 @@ struct Aabb {
 
   /// The box of a single point.
   [[nodiscard]] static Aabb of_point(const Vec3& p) { return {p, p}; }
+  /// The box of @p points (empty for none).
+  [[nodiscard]] static Aabb of(std::span<const Vec3> points) {
+    Aabb b;
+    for (const Vec3& p : points) b.extend(p);
+    return b;
+  }
   /// The box of three points (a triangle).
   [[nodiscard]] static Aabb of_triangle(const Vec3& a, const Vec3& b, const Vec3& c) {
     return {a.cwiseMin(b).cwiseMin(c), a.cwiseMax(b).cwiseMax(c)};

@@ -7,14 +7,9 @@
 #include <vector>
 
 #include "ido/core/math.h"
+#include "ido/geometry/aabb.h"
 
 namespace ido::geometry {
-
-/// Axis-aligned box (mm).
-struct Box3 {
-  Vec3 lo = Vec3::Constant(0.0);
-  Vec3 hi = Vec3::Constant(0.0);
-};
 
 /// Static spatial hash of boxes after Teschner et al., "Optimized Spatial Hashing for
 /// Collision Detection of Deformable Objects", VMV 2003: space is cut into cubic cells of
@@ -29,7 +24,7 @@ class SpatialHash {
   /// Builds the hash of @p boxes (item i = boxes[i]). @p cell_size_mm > 0; the table size
   /// is the smallest prime ≥ 2 × (number of cell entries).
   /// @throws ido::InvalidInput for a non-positive cell size or a non-finite box.
-  SpatialHash(std::span<const Box3> boxes, double cell_size_mm);
+  SpatialHash(std::span<const Aabb> boxes, double cell_size_mm);
 
   /// Bucket index of the cell holding point @p p_mm.
   [[nodiscard]] std::size_t bucket_of(const Vec3& p_mm) const noexcept {
@@ -44,11 +39,11 @@ class SpatialHash {
   /// Calls f(item) for every item entered in a cell overlapping @p box; an item can be
   /// reported more than once. Allocates nothing.
   template <class F>
-  void for_each_in_box(const Box3& box, F&& f) const {
+  void for_each_in_box(const Aabb& box, F&& f) const {
     if (m_offsets.empty()) return;
-    const std::int64_t i0 = cell_coordinate(box.lo.x()), i1 = cell_coordinate(box.hi.x());
-    const std::int64_t j0 = cell_coordinate(box.lo.y()), j1 = cell_coordinate(box.hi.y());
-    const std::int64_t k0 = cell_coordinate(box.lo.z()), k1 = cell_coordinate(box.hi.z());
+    const std::int64_t i0 = cell_coordinate(box.min.x()), i1 = cell_coordinate(box.max.x());
+    const std::int64_t j0 = cell_coordinate(box.min.y()), j1 = cell_coordinate(box.max.y());
+    const std::int64_t k0 = cell_coordinate(box.min.z()), k1 = cell_coordinate(box.max.z());
     for (std::int64_t i = i0; i <= i1; ++i)
       for (std::int64_t j = j0; j <= j1; ++j)
         for (std::int64_t k = k0; k <= k1; ++k) {

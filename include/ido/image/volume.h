@@ -12,6 +12,7 @@
 #include "ido/core/error.h"
 #include "ido/core/math.h"
 #include "ido/core/memory.h"
+#include "ido/geometry/aabb.h"
 
 namespace ido::image {
 
@@ -139,17 +140,13 @@ class Volume {
   [[nodiscard]] const Mat3& index_to_world_matrix() const noexcept { return m_index_to_world; }
   [[nodiscard]] const Mat3& world_to_index_matrix() const noexcept { return m_world_to_index; }
 
-  /// Axis-aligned world bounds (mm) of the voxel centres' hull, as {min, max}.
-  [[nodiscard]] std::array<Vec3, 2> world_bounds() const {
-    Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
-    for (int c = 0; c < 8; ++c) {
-      const Vec3 idx((c & 1) ? double(m_size[0] - 1) : 0.0, (c & 2) ? double(m_size[1] - 1) : 0.0,
-                     (c & 4) ? double(m_size[2] - 1) : 0.0);
-      const Vec3 w = index_to_world(idx);
-      lo = lo.cwiseMin(w);
-      hi = hi.cwiseMax(w);
-    }
-    return {lo, hi};
+  /// Axis-aligned world bounds (mm) of the voxel centres' hull.
+  [[nodiscard]] geometry::Aabb world_bounds() const {
+    geometry::Aabb b;
+    for (int c = 0; c < 8; ++c)
+      b.extend(index_to_world(Vec3((c & 1) ? double(m_size[0] - 1) : 0.0, (c & 2) ? double(m_size[1] - 1) : 0.0,
+                                   (c & 4) ? double(m_size[2] - 1) : 0.0)));
+    return b;
   }
 
   // ---- sampling ----------------------------------------------------------------------

@@ -10,6 +10,7 @@
 #include "ido/core/math.h"
 #include "ido/core/progress.h"
 #include "ido/geometry/mesh_checks.h"
+#include "ido/geometry/aabb.h"
 #include "ido/geometry/triangle_mesh.h"
 #include "ido/image/volume.h"
 #include "ido/segment/balloon_forces.h"
@@ -49,7 +50,7 @@ struct BalloonOptions {
   std::int64_t max_inflation_work = 2'000'000;
   /// Optional region of interest (world mm, axis-aligned {min, max}): outside it the
   /// balloon deflates. A user safeguard, not the leak-stopping mechanism.
-  std::optional<std::array<Vec3, 2>> roi_mm;
+  std::optional<geometry::Aabb> roi_mm;
   /// Leak control: the territory the front may enter (chambers wider than the seed region,
   /// stop points, a radius bound, neighbour separation). See LeakGuard; on by default.
   LeakControlOptions leak;

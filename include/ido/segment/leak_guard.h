@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "ido/core/math.h"
+#include "ido/geometry/aabb.h"
 #include "ido/image/volume.h"
 #include "ido/segment/intensity_model.h"
 
@@ -57,10 +58,10 @@ struct LeakEvent {
 class LeakGuard {
  public:
   LeakGuard() = default;  ///< blocks nothing
-  /// @p roi_mm optional {min, max} box outside which the band is not grown.
+  /// @p roi_mm optional box outside which the band is not grown.
   /// @throws ido::InvalidInput on a non-finite or negative option, or a stop point outside the volume.
   LeakGuard(const image::Volume<float>& smoothed, const IntensityModel& model, const std::vector<Vec3>& seeds_mm,
-            const LeakControlOptions& options, const std::optional<std::array<Vec3, 2>>& roi_mm = {},
+            const LeakControlOptions& options, const std::optional<geometry::Aabb>& roi_mm = {},
             bool threaded = true);
 
   [[nodiscard]] bool active() const noexcept { return !m_closed.empty(); }

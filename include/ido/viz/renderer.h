@@ -136,8 +136,8 @@ class Renderer {
   /// Background colour (RGB in [0, 1]), default white.
   void set_background(const Vec3& rgb) { m_background = rgb; }
 
-  /// Axis-aligned bounds {min, max} (mm) of everything added; zeros when empty.
-  [[nodiscard]] std::array<Vec3, 2> bounds() const;
+  /// Axis-aligned bounds (mm) of everything added; a zero box when empty.
+  [[nodiscard]] geometry::Aabb bounds() const;
 
   /// Renders the scene. @throws ido::Error if OSMesa cannot create a context.
   [[nodiscard]] Image render() const;
