@@ -57,7 +57,9 @@ TEST(SpatialHash, BoxQueryVisitsEveryOverlappingBox) {
     std::set<std::int32_t> got;
     hash.for_each_in_box(query, [&](std::int32_t i) { got.insert(i); });
     for (std::size_t i = 0; i < boxes.size(); ++i)
-      if (boxes[i].overlaps(query)) ASSERT_TRUE(got.count(std::int32_t(i))) << "box " << i;
+      if (boxes[i].overlaps(query)) {
+        ASSERT_TRUE(got.count(std::int32_t(i))) << "box " << i;
+      }
   }
 }
 
