@@ -6,6 +6,7 @@
 #include <system_error>
 
 #include "ido/core/error.h"
+#include "ido/core/statistics.h"
 #include "ido/io/mesh_io.h"
 #include "ido/io/volume_io.h"
 #include "parsers.h"
@@ -44,14 +45,11 @@ VolumeStatistics volume_statistics(const image::Volume<float>& volume) {
   double sq = 0.0;
   for (float v : d) sq += (v - s.mean) * (v - s.mean);
   s.stddev = std::sqrt(sq / double(d.size()));
-  std::vector<float> sorted(d);
-  for (double p : {1.0, 5.0, 25.0, 50.0, 75.0, 95.0, 99.0}) {
-    // Nearest rank: the smallest value with at least p % of the voxels at or below it.
-    auto rank = static_cast<std::size_t>(std::ceil(p / 100.0 * double(sorted.size())));
-    rank = std::clamp<std::size_t>(rank, 1, sorted.size()) - 1;
-    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(rank), sorted.end());
-    s.percentiles.emplace_back(p, sorted[rank]);
-  }
+  const std::vector<double> ps{1.0, 5.0, 25.0, 50.0, 75.0, 95.0, 99.0};
+  std::vector<double> qs;
+  for (double p : ps) qs.push_back(p / 100.0);
+  const std::vector<double> v = percentiles(std::vector<float>(d), qs);
+  for (std::size_t i = 0; i < ps.size(); ++i) s.percentiles.emplace_back(ps[i], v[i]);
   return s;
 }
 

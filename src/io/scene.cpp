@@ -16,6 +16,7 @@
 
 #include "ido/core/atomic_file.h"
 #include "ido/core/error.h"
+#include "ido/core/statistics.h"
 #include "ido/geometry/tet_quality.h"
 #include "ido/io/mesh_io.h"
 #include "ido/io/pvd.h"
@@ -547,15 +548,6 @@ Scene load_scene(const std::filesystem::path& path) {
 
 namespace {
 
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const double pos = q * static_cast<double>(v.size() - 1);
-  const auto i = static_cast<std::size_t>(pos);
-  const double f = pos - static_cast<double>(i);
-  return i + 1 < v.size() ? v[i] * (1 - f) + v[i + 1] * f : v[i];
-}
-
 geometry::Field tensor_field(const std::vector<Mat3>& m) {
   geometry::Field f;
   f.components = 9;
@@ -760,10 +752,9 @@ SceneRunResult run_steps(Scene& scene, const std::filesystem::path& out_dir, Pro
   report_json["tetrahedra"] = frame.tets.size();
   report_json["frames"] = result.frames;
   report_json["wall_time_s"] = result.wall_time_s;
-  report_json["ms_per_step"] = {{"p50", percentile(result.step_ms, 0.5)},
-                                {"p90", percentile(result.step_ms, 0.9)},
-                                {"p99", percentile(result.step_ms, 0.99)},
-                                {"max", percentile(result.step_ms, 1.0)}};
+  const std::vector<double> ms =
+      result.step_ms.empty() ? std::vector<double>(4, 0.0) : percentiles(result.step_ms, {0.5, 0.9, 0.99, 1.0});
+  report_json["ms_per_step"] = {{"p50", ms[0]}, {"p90", ms[1]}, {"p99", ms[2]}, {"max", ms[3]}};
   const auto fe = sim::energies(world);
   json per_model = json::array();
   for (std::size_t m = 0; m < fe.elastic_mj.size(); ++m)

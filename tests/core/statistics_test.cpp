@@ -39,6 +39,9 @@ TEST(Percentile, SelectionAndSortAgreeAndAreMonotone) {
         EXPECT_LE(all[i - 1], all[i]);
       }
     }
+    const std::vector<float> vf(v.begin(), v.end());
+    const std::vector<double> vd(vf.begin(), vf.end());
+    EXPECT_EQ(percentiles(vf, qs), percentiles(vd, qs)) << "n " << n;  // the float overload: the same rule
     EXPECT_DOUBLE_EQ(all.front(), *std::min_element(v.begin(), v.end()));
     EXPECT_DOUBLE_EQ(all.back(), *std::max_element(v.begin(), v.end()));
   }
@@ -49,7 +52,7 @@ TEST(Percentile, RefusesAnEmptySampleAndAQuantileOutsideTheUnitInterval) {
   EXPECT_THROW((void)median({}), InvalidInput);
   EXPECT_THROW((void)percentile({1, 2}, 1.5), InvalidInput);
   EXPECT_THROW((void)percentile({1, 2}, -0.1), InvalidInput);
-  EXPECT_THROW((void)percentiles({1, 2}, {0.5, std::nan("")}), InvalidInput);
+  EXPECT_THROW((void)percentiles(std::vector<double>{1, 2}, {0.5, std::nan("")}), InvalidInput);
 }
 
 }  // namespace
