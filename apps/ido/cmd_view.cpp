@@ -1,0 +1,105 @@
+// SPDX-License-Identifier: Apache-2.0
+// `ido view [FILE...] [--script EVENTS.json --screenshots DIR] [--record EVENTS.json] [--frames N]
+//  [--size WxH] [--organ NAME] [--seed-voxel I,J,K] [--surface S.stl] [--mask M.nii.gz] [--report R.json]
+//  [--tet-output M.vtu] [--tet-edge MM] [--burr-radius MM] [--drill-max S] [--drill-path P.csv] [--drill-report R.json]
+//  [--deform-log LOG.json]`:
+//  the interactive workbench. Presentation only: the workbench is ido::view::run_workbench.
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "cli_util.h"
+#include "command.h"
+#include "ido/core/error.h"
+#include "ido/view/workbench.h"
+#include "snapshots.h"
+
+namespace ido::cli {
+namespace {
+
+struct ViewCliOptions {
+  std::vector<std::string> files;
+  std::string script, screenshots, record;
+  std::int64_t frames = 0;
+  std::string size = "1280x800";
+  std::string organ = "generic";
+  std::vector<std::string> seed_voxels;
+  std::string surface, mask, report;
+  std::string tet_output;
+  double tet_edge_mm = 0.0;
+  double burr_radius_mm = 2.0;
+  double drill_max_s = 60.0;
+  std::string drill_path, drill_report;
+  std::string deform_log;
+};
+
+void run(const ViewCliOptions& o, const GlobalOptions& g) {
+  view::WorkbenchOptions w;
+  for (const auto& f : o.files) w.files.emplace_back(f);
+  w.script = o.script;
+  w.screenshots = o.screenshots;
+  w.record = o.record;
+  if (o.frames < 0) throw InvalidInput(fmt::format("--frames must be 0 (no limit) or more, got {}", o.frames));
+  w.max_frames = o.frames;
+  const auto [width, height] = parse_picture_size(o.size, "--size");
+  w.width_px = width;
+  w.height_px = height;
+  w.organ = parse_organ_option(o.organ, "--organ");
+  for (const auto& s : o.seed_voxels) w.seed_voxels.push_back(parse_index3(s, "--seed-voxel"));
+  w.segment_outputs = {o.surface, o.mask, o.report};
+  for (const auto& [path, option] : {std::pair{o.surface, "--surface"}, {o.mask, "--mask"}, {o.report, "--report"}})
+    if (!path.empty()) check_output_file(path, option);
+  if (!o.record.empty()) check_output_file(o.record, "--record");
+  w.tet_output = o.tet_output;
+  if (!o.tet_output.empty()) check_output_file(o.tet_output, "--tet-output");
+  w.tet_edge_mm = o.tet_edge_mm;
+  w.burr_radius_mm = o.burr_radius_mm;
+  w.drill_max_s = o.drill_max_s;
+  w.drill_path = o.drill_path;
+  w.drill_report = o.drill_report;
+  if (!o.drill_path.empty()) check_output_file(o.drill_path, "--drill-path");
+  if (!o.drill_report.empty()) check_output_file(o.drill_report, "--drill-report");
+  w.deform_log = o.deform_log;
+  if (!o.deform_log.empty()) check_output_file(o.deform_log, "--deform-log");
+  w.quiet = g.quiet;
+  view::run_workbench(w);
+}
+
+void setup(CLI::App& app, const GlobalOptions& g) {
+  auto* sub = app.add_subcommand("view", "Interactive workbench: segment a CT live, tetrahedralise and clip, drill by hand, look at surfaces and scenes");
+  auto opts = std::make_shared<ViewCliOptions>();
+  sub->add_option("FILE", opts->files,
+                  "files to open: a CT volume (.nii .nii.gz .mha .nrrd ...), surfaces (.stl .ply .obj .vtp), "
+                  "tetrahedral meshes (.vtu .msh .node), scenes (.json)");
+  sub->add_option("--script", opts->script,
+                  "replay the input events of EVENTS.json (docs/viewer.md), then close the window");
+  sub->add_option("--screenshots", opts->screenshots, "folder for the script's screenshots (PNG)");
+  sub->add_option("--record", opts->record, "write the session's input events to EVENTS.json when the window closes");
+  sub->add_option("--frames", opts->frames, "close after this many frames (0: no limit)");
+  sub->add_option("--size", opts->size, "window size WIDTHxHEIGHT in pixels; default 1280x800 (a script's own size wins)");
+  sub->add_option("--organ", opts->organ, "first organ choice of the Segment workspace: generic, artery, vein, vertebra");
+  sub->add_option("--seed-voxel", opts->seed_voxels, "seed voxel I,J,K placed at start; repeatable");
+  sub->add_option("--surface", opts->surface, "where Save (ctrl+s) writes the segmented surface (.stl .ply .obj .vtp)");
+  sub->add_option("--mask", opts->mask, "where Save writes the mask (a volume file)");
+  sub->add_option("--report", opts->report, "where Save writes the report (JSON, as ido segment --report)");
+  sub->add_option("--tet-output", opts->tet_output,
+                  "where Save (ctrl+s) in the Mesh workspace writes the tetrahedra (.vtu .msh .node)");
+  sub->add_option("--tet-edge", opts->tet_edge_mm,
+                  "the Mesh workspace's lattice spacing (mm); 0 (default) = the surface's mean edge, as ido tetmesh");
+  sub->add_option("--burr-radius", opts->burr_radius_mm, "the Drill workspace's spherical burr radius (mm); default 2");
+  sub->add_option("--drill-max", opts->drill_max_s, "longest drilling session (s); default 60");
+  sub->add_option("--drill-path", opts->drill_path,
+                  "write each drilling session's path here when it ends (CSV t,x,y,z that ido drill --path replays)");
+  sub->add_option("--drill-report", opts->drill_report,
+                  "write each drilling session's figures here when it ends (JSON: removed volume, timing percentiles)");
+  sub->add_option("--deform-log", opts->deform_log,
+                  "write the pulled particle's positions, time and momentum per shown step to this JSON on exit");
+  sub->callback([opts, &g] { run(*opts, g); });
+}
+
+const bool kRegistered = register_command({"view", 95, setup});
+
+}  // namespace
+}  // namespace ido::cli

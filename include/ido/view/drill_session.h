@@ -1,0 +1,137 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <cstddef>
+#include <filesystem>
+#include <memory>
+#include <thread>
+#include <vector>
+
+#include "ido/core/math.h"
+#include "ido/drill/haptic_device.h"
+#include "ido/drill/lock_free.h"
+#include "ido/drill/simulator.h"
+#include "ido/drill/tet_hierarchy.h"
+#include "ido/geometry/tet_mesh.h"
+#include "ido/geometry/triangle_mesh.h"
+
+namespace ido::view {
+
+/// A haptic device moved by the window: the render thread sets the burr position, the haptic
+/// thread reads it at every tick and records (time, position) — the session's path — into
+/// storage fixed at construction. Forces go back through a triple buffer. No lock, allocation
+/// or exception on the haptic thread.
+class WindowDevice final : public drill::HapticDevice {
+ public:
+  /// Keeps up to @p capacity ticks of path; the session finishes by itself after
+  /// @p max_duration_s (s) of session time.
+  WindowDevice(std::size_t capacity, double max_duration_s);
+
+  /// Render thread: the burr centre (mm, world) from now on.
+  void set_position(const Vec3& position_mm) noexcept;
+  /// Render thread: ends the session at the next tick.
+  void finish() noexcept { m_finished.store(true, std::memory_order_release); }
+
+  drill::ToolPose read_pose(double t_s) noexcept override;
+  void write_force(const Vec3& force_n, double t_s) noexcept override;
+  [[nodiscard]] bool has_pose() const noexcept override { return m_has_pose.load(std::memory_order_acquire); }
+  [[nodiscard]] bool finished(double t_s) const noexcept override;
+
+  /// Render thread: the newest force the haptic thread rendered (N) and its session time (s).
+  [[nodiscard]] drill::ForceSample latest_force() noexcept { return m_force.read(); }
+  /// Ticks recorded so far; entries below it never change (any thread).
+  [[nodiscard]] std::size_t recorded() const noexcept { return m_count.load(std::memory_order_acquire); }
+  /// Session time (s) and burr centre (mm) of recorded tick @p i < recorded().
+  [[nodiscard]] double time_s(std::size_t i) const noexcept { return m_times[i]; }
+  [[nodiscard]] const Vec3& position_mm(std::size_t i) const noexcept { return m_positions[i]; }
+
+ private:
+  drill::TripleBuffer<Vec3> m_pose;
+  drill::TripleBuffer<drill::ForceSample> m_force;
+  std::vector<double> m_times;
+  std::vector<Vec3> m_positions;
+  std::atomic<std::size_t> m_count{0};
+  std::atomic<bool> m_has_pose{false};
+  std::atomic<bool> m_finished{false};
+  double m_max_duration_s;
+};
+
+/// A drilled surface handed to the window.
+struct DrillSnapshot {
+  double t_s = 0.0;                ///< session time (s)
+  geometry::TriangleMesh surface;  ///< the material's boundary (mm), closed
+  double volume_mm3 = 0.0;         ///< the volume it encloses (mm³)
+  bool final = false;              ///< the surface after the session ended and the backlog drained
+};
+
+/// What the window shows of a running session.
+struct DrillFigures {
+  Vec3 force_n = Vec3::Zero();  ///< the newest rendered force (N)
+  bool contact = false;          ///< the force is not zero
+  double session_s = 0.0;        ///< session time of the newest tick (s)
+  std::size_t ticks = 0;         ///< haptic ticks so far
+  drill::Percentiles haptic_period_ms;  ///< over the last 2000 ticks (ms)
+};
+
+/// A drilling session driven from the window: drill::Simulator's three threads as `ido drill`
+/// runs them (haptic loop at its period, collision/erosion, render consumer), with the device
+/// moved by the window; the render consumer hands drilled surfaces to the window through a
+/// triple buffer. start() and stop() never wait: Simulator::run() (which returns once the
+/// device finished and the erosion backlog is drained) runs on a thread of its own.
+class DrillSession {
+ public:
+  /// @p mesh is the material (mm); @p options as `ido drill` sets them (drill_cli_options());
+  /// @p max_duration_s bounds the session (s). @throws as drill::TetHierarchy and drill::Simulator.
+  DrillSession(const geometry::TetMesh& mesh, const drill::SimulatorOptions& options, double max_duration_s = 60.0);
+  ~DrillSession();
+  DrillSession(const DrillSession&) = delete;
+  DrillSession& operator=(const DrillSession&) = delete;
+
+  /// Starts the threads with the burr at @p start_mm.
+  void start(const Vec3& start_mm);
+  /// Moves the burr (render thread).
+  void move_tool(const Vec3& position_mm) { m_device.set_position(position_mm); }
+  /// Ends the session (the simulator drains its backlog on its own thread).
+  void stop() { m_device.finish(); }
+  [[nodiscard]] bool started() const { return m_thread.joinable() || m_ended.load(); }
+  /// True once Simulator::run() returned; stats() and the path are final then.
+  [[nodiscard]] bool ended();
+
+  /// The newest drilled surface handed over (null before the first).
+  [[nodiscard]] std::shared_ptr<const DrillSnapshot> latest_surface();
+  [[nodiscard]] DrillFigures figures();
+  /// Material volume before the session (mm³).
+  [[nodiscard]] double initial_volume_mm3() const { return m_initial_volume_mm3; }
+  /// The session's measurements (after ended()).
+  [[nodiscard]] const drill::SessionStats& stats() const { return m_simulator->stats(); }
+  [[nodiscard]] const drill::SimulatorOptions& options() const { return m_options; }
+  /// Writes the recorded path as CSV `t,x,y,z` (s, mm; one row per haptic tick, times strictly
+  /// increasing), which `ido drill --path` replays. @throws ido::IoError; ido::Error before ended().
+  void write_path_csv(const std::filesystem::path& path) const;
+  /// Runs on the simulator's render consumer: makes and hands over a surface.
+  void take_snapshot(double t_s, const std::vector<std::vector<drill::SurfaceFace>>& v_lists);
+
+ private:
+  drill::SimulatorOptions m_options;
+  double m_max_duration_s;
+  std::unique_ptr<drill::TetHierarchy> m_hierarchy;
+  std::vector<Vec3> m_root_vertices;
+  double m_initial_volume_mm3 = 0.0;
+  WindowDevice m_device;
+  std::unique_ptr<drill::Simulator> m_simulator;
+  drill::TripleBuffer<std::shared_ptr<const DrillSnapshot>> m_surfaces;
+  std::shared_ptr<const DrillSnapshot> m_latest;
+  std::chrono::steady_clock::time_point m_start;
+  std::thread m_thread;
+  std::atomic<bool> m_ended{false};
+  std::atomic<bool> m_failed{false};
+};
+
+/// The simulator options `ido drill` uses for a burr of @p burr_radius_mm with its default
+/// arguments: force threshold 0.2 N, removal at once (rate 0), coupling 1.5 N/mm, leaves down
+/// to a quarter of the burr radius.
+[[nodiscard]] drill::SimulatorOptions drill_cli_options(double burr_radius_mm);
+
+}  // namespace ido::view

@@ -1,0 +1,154 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "ido/view/deform_session.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <deque>
+
+#include "ido/core/error.h"
+#include "ido/sim/diagnostics.h"
+
+namespace ido::view {
+namespace {
+
+double equivalent_strain(const Mat3& e) {
+  const Mat3 dev = e - e.trace() / 3.0 * Mat3::Identity();
+  return std::sqrt(2.0 / 3.0 * dev.cwiseProduct(dev).sum());
+}
+
+}  // namespace
+
+DeformSession::DeformSession(io::Scene scene) : m_scene(std::move(scene)) {
+  if (m_scene.bodies.empty()) throw InvalidInput("the scene has no bodies to deform");
+  m_bodies = m_scene.bodies;
+  m_integrator_names = m_scene.world.integrators().names();
+  m_dt_s = m_scene.dt_s;
+  m_thread = std::thread([this] { work(); });
+}
+
+DeformSession::~DeformSession() {
+  m_stop = true;
+  if (m_thread.joinable()) m_thread.join();
+}
+
+void DeformSession::set_integrator(const std::string& name) {
+  const auto it = std::find(m_integrator_names.begin(), m_integrator_names.end(), name);
+  if (it == m_integrator_names.end()) throw InvalidInput("unknown integrator '" + name + "'");
+  m_integrator_request.store(int(it - m_integrator_names.begin()));
+}
+
+std::vector<std::int32_t> DeformSession::grab_group(std::int32_t particle) const {
+  std::vector<std::int32_t> group = {particle};
+  for (const io::SceneBody& b : m_bodies) {
+    const std::int32_t local = particle - b.first_particle;
+    if (local < 0 || std::size_t(local) >= b.rest_mesh.vertices.size()) continue;
+    for (const Tet& t : b.rest_mesh.tets)
+      if (std::find(t.begin(), t.end(), local) != t.end())
+        for (std::int32_t v : t) group.push_back(v + b.first_particle);
+  }
+  std::sort(group.begin(), group.end());
+  group.erase(std::unique(group.begin(), group.end()), group.end());
+  return group;
+}
+
+std::shared_ptr<const DeformState> DeformSession::latest() {
+  if (m_states.has_new()) m_latest = m_states.read();
+  return m_latest;
+}
+
+void DeformSession::work() {
+  sim::World& world = m_scene.world;
+  const std::vector<sim::PointLoad> base_loads = world.external().point_loads;
+  std::deque<EnergySample> history;
+  std::string error;
+  std::int32_t grabbed = -1;
+  std::vector<std::int32_t> group;
+  double grab_k = 0.0;
+  auto publish = [&] {
+    auto s = std::make_shared<DeformState>();
+    s->steps = world.step_count();
+    s->time_s = world.time_s();
+    s->integrator = world.integrator();
+    s->positions_mm = world.particles().positions();
+    s->linear_momentum = sim::momentum(world.particles()).linear_kg_mm_s;
+    for (const io::SceneBody& b : m_bodies) {
+      std::vector<double> vm, strain;
+      if (b.stress_model_index < world.models().size())
+        if (const auto f = world.models()[b.stress_model_index]->element_fields(world.particles())) {
+          vm = f->von_mises_pa;
+          for (const Mat3& e : f->green_strain) strain.push_back(equivalent_strain(e));
+        }
+      s->von_mises_pa.push_back(std::move(vm));
+      s->equivalent_strain.push_back(std::move(strain));
+    }
+    s->history.assign(history.begin(), history.end());
+    s->error = error;
+    s->grab_stiffness_n_per_mm = grab_k;
+    m_states.write(std::shared_ptr<const DeformState>(std::move(s)));
+  };
+  auto sample = [&](double step_ms) {
+    const sim::EnergyReport e = sim::energies(world);
+    history.push_back({world.time_s(), e.kinetic_mj, e.elastic_total_mj(), e.total_mj(), step_ms});
+    if (history.size() > DeformState::kHistory) history.pop_front();
+  };
+  sample(0.0);
+  publish();
+  bool unpublished = false;  // steps taken since the last state handed over
+  while (!m_stop) {
+    const bool requested = m_step_requests.load() > 0;
+    if (!error.empty() || (!m_running && !requested)) {
+      if (unpublished) publish();  // the state the run stopped at
+      unpublished = false;
+      if (requested) m_step_requests.store(0);
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+      continue;
+    }
+    if (const int i = m_integrator_request.exchange(-1); i >= 0) world.set_integrator(m_integrator_names[std::size_t(i)]);
+    // The grab spring is a point load recomputed from the particle's position before each step.
+    world.external().point_loads = base_loads;
+    const GrabSpring& g = m_grab.read();
+    grab_k = 0.0;
+    if (g.active && g.particle >= 0 && std::size_t(g.particle) < world.particles().size()) {
+      if (g.particle != grabbed) {
+        group = grab_group(g.particle);
+        grabbed = g.particle;
+      }
+      const auto& x = world.particles().positions();
+      const auto& m = world.particles().masses();
+      double mass = 0.0;
+      Vec3 centre = Vec3::Zero();
+      for (std::int32_t i : group) {
+        mass += m[std::size_t(i)];
+        centre += m[std::size_t(i)] * x[std::size_t(i)];
+      }
+      if (mass > 0) {
+        centre /= mass;
+        grab_k = std::min(g.stiffness_n_per_mm, 2.0 * mass / (m_dt_s * m_dt_s * 1e3));
+        for (std::int32_t i : group)
+          world.external().point_loads.push_back({i, m[std::size_t(i)] / mass * grab_k * (g.target_mm - centre)});
+      }
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    try {
+      world.step(m_dt_s);
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+    const double step_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    for (const Vec3& p : world.particles().positions())
+      if (!p.allFinite() || p.cwiseAbs().maxCoeff() > 1e7) {
+        error = "the simulation diverged (a position is not finite): reduce dt_s or use implicit_euler";
+        break;
+      }
+    sample(step_ms);
+    if (requested) m_step_requests.fetch_sub(1);
+    unpublished = true;
+    if (!m_states.has_new() || requested || !error.empty()) {
+      publish();
+      unpublished = false;
+    }
+  }
+}
+
+}  // namespace ido::view

@@ -1,0 +1,444 @@
+// SPDX-License-Identifier: Apache-2.0
+// `ido view` in a window under Xvfb (Mesa llvmpipe), driven by event scripts: what a user
+// sees and gets. A click on the axial slice puts the seed on the voxel under the cursor (its
+// world position in the report); the balloon grown in the window and saved with ctrl+s is
+// `ido segment`'s surface, mask and report from the same seed, bit for bit; the screenshot
+// shows the balloon in the 3-D view and its contour and the seed on the slice; a recorded
+// session replays to the same seed; surfaces and tetrahedral meshes show in the Scene view.
+
+#include <algorithm>
+#include <cstdlib>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <string>
+#include <sys/wait.h>
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "ido/io/mesh_io.h"
+#include "ido/io/volume_io.h"
+#include "ido/segment/balloon.h"
+#include "ido/view/orbit_camera.h"
+#include "ido/view/slice_view.h"
+#include "support/png_read.h"
+#include "support/test_support.h"
+
+namespace ido {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The layout docs/viewer.md describes, for a 960×640 window: the panel is 340 px wide, the
+// views share the rest in a 2×2 grid (axial top-left, 3-D top-right).
+constexpr int kWidth = 960, kHeight = 640;
+const view::PixelRect kAxial{340, 0, 310, 320};
+const view::PixelRect k3d{650, 0, 310, 320};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+nlohmann::json read_json(const fs::path& p) { return nlohmann::json::parse(slurp(p)); }
+
+/// Runs `ido view ARGS` in a fresh Xvfb server (24-bit screen) and captures its output.
+test::CommandResult run_view(const std::string& args, const fs::path& dir) {
+  const fs::path out = dir / "view-out.txt", err = dir / "view-err.txt";
+  // Mesa's and X11's own allocations kept for the process's life (sanitizer builds only).
+  const fs::path supp = test::source_dir() / "tests" / "sanitizer" / "lsan-view.supp";
+  const std::string cmd = fmt::format(
+      "xvfb-run -a -s '-screen 0 1280x1024x24' env LSAN_OPTIONS=suppressions={}:print_suppressions=0 {} view {} "
+      ">{} 2>{} </dev/null",
+      supp.string(), test::tool_path().string(), args, out.string(), err.string());
+  const int status = std::system(cmd.c_str());
+  test::CommandResult r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = slurp(out);
+  r.err = slurp(err);
+  return r;
+}
+
+/// A CT (anisotropic voxels, off-origin) of a ball of radius 9 mm, 350 HU in 40 HU.
+image::Volume<float> ball_ct() {
+  image::Volume<float> ct({28, 32, 26}, Vec3(1.1, 1.0, 1.2), Vec3(-12, 4, 30));
+  const Vec3 centre = ct.index_to_world(Vec3(14, 16, 13));
+  for (std::int64_t k = 0; k < ct.size(2); ++k)
+    for (std::int64_t j = 0; j < ct.size(1); ++j)
+      for (std::int64_t i = 0; i < ct.size(0); ++i)
+        ct(i, j, k) = (ct.index_to_world(Vec3(double(i), double(j), double(k))) - centre).norm() < 9.0 ? 350.f : 40.f;
+  return ct;
+}
+
+nlohmann::json event(std::int64_t frame, const char* type) { return {{"frame", frame}, {"type", type}}; }
+nlohmann::json mouse(std::int64_t frame, const char* type, double x, double y) {
+  nlohmann::json e = event(frame, type);
+  e["x"] = x;
+  e["y"] = y;
+  return e;
+}
+nlohmann::json key(std::int64_t frame, const char* type, const char* name, bool ctrl) {
+  nlohmann::json e = event(frame, type);
+  e["key"] = name;
+  e["ctrl"] = ctrl;
+  return e;
+}
+nlohmann::json wait(std::int64_t frame, const char* until) {
+  nlohmann::json e = event(frame, "wait");
+  e["until"] = until;
+  e["timeout"] = 120;
+  return e;
+}
+
+void write_script(const fs::path& path, const nlohmann::json& events) {
+  std::ofstream(path) << nlohmann::json{{"window", {kWidth, kHeight}}, {"events", events}}.dump(1);
+}
+
+/// Pixels of @p png inside @p r for which @p pred(r, g, b) holds.
+template <class Pred>
+int count(const test::Png& png, const view::PixelRect& r, Pred pred) {
+  int n = 0;
+  for (int y = int(r.y); y < int(r.y + r.height); ++y)
+    for (int x = int(r.x); x < int(r.x + r.width); ++x) {
+      const auto* p = png.at(x, y);
+      n += pred(int(p[0]), int(p[1]), int(p[2])) ? 1 : 0;
+    }
+  return n;
+}
+
+class ViewWindow : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ASSERT_EQ(std::system("command -v xvfb-run >/dev/null 2>&1"), 0)
+        << "xvfb-run is missing: scripts/install-deps.sh installs xvfb";
+    dir = test::scratch_dir(::testing::UnitTest::GetInstance()->current_test_info()->name());
+    ct_path = dir / "ball.nii.gz";
+    io::write_volume(ct_path, ball_ct());
+    ct = io::read_volume(ct_path);  // as both tools read it
+  }
+  fs::path dir, ct_path;
+  image::Volume<float> ct;
+};
+
+TEST_F(ViewWindow, SeedClickBalloonAndSaveEqualIdoSegment) {
+  // Scroll the axial slice up by two, then click voxel (16, 15) of it: the seed is voxel
+  // (16, 15, 13 + 2) (the window opens at the middle slice, 26 / 2).
+  const view::SliceView axial(2, ct.size(), ct.spacing(), kAxial);
+  const auto [px, py] = axial.pixel_of(16, 15);
+  const Index3 voxel = {16, 15, 15};
+  write_script(dir / "seed.json",
+               {mouse(1, "mouse_move", px, py), [&] {
+                  auto e = mouse(2, "scroll", px, py);
+                  e["dy"] = 2;
+                  return e;
+                }(),
+                mouse(3, "mouse_down", px, py), mouse(4, "mouse_up", px, py), wait(5, "segment_done"),
+                key(6, "key_down", "s", true), key(7, "key_up", "s", true), wait(8, "idle"),
+                [] {
+                  auto e = event(9, "screenshot");
+                  e["name"] = "segment.png";
+                  return e;
+                }(),
+                event(10, "quit")});
+  const auto r = run_view(fmt::format("{} --script {} --screenshots {} --surface {} --mask {} --report {}",
+                                      ct_path.string(), (dir / "seed.json").string(), (dir / "shots").string(),
+                                      (dir / "view.ply").string(), (dir / "view_mask.nii.gz").string(),
+                                      (dir / "view.json").string()),
+                            dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
+
+  // The seed is the clicked voxel's centre in world coordinates.
+  const nlohmann::json view_report = read_json(dir / "view.json");
+  const Vec3 expected = ct.index_to_world(Vec3(double(voxel[0]), double(voxel[1]), double(voxel[2])));
+  ASSERT_EQ(view_report["seeds_mm"].size(), 1u);
+  for (int c = 0; c < 3; ++c) EXPECT_EQ(view_report["seeds_mm"][0][std::size_t(c)].get<double>(), expected[c]) << c;
+
+  // `ido segment` from the same voxel writes the same surface, mask and report.
+  const auto cli = test::run_tool(fmt::format("segment {} --seed-voxel {},{},{} -o {} --mask {} --report {} -q",
+                                              ct_path.string(), voxel[0], voxel[1], voxel[2],
+                                              (dir / "cli.ply").string(), (dir / "cli_mask.nii.gz").string(),
+                                              (dir / "cli.json").string()));
+  ASSERT_EQ(cli.exit_code, 0) << cli.err;
+  const geometry::TriangleMesh a = io::read_triangle_mesh(dir / "view.ply"), b = io::read_triangle_mesh(dir / "cli.ply");
+  ASSERT_GT(a.triangle_count(), 100u);
+  EXPECT_TRUE(a.vertices == b.vertices) << "the window's balloon differs from ido segment's";
+  EXPECT_TRUE(a.triangles == b.triangles);
+  EXPECT_EQ(slurp(dir / "view.ply"), slurp(dir / "cli.ply"));
+  const auto mask_a = io::read_volume(dir / "view_mask.nii.gz"), mask_b = io::read_volume(dir / "cli_mask.nii.gz");
+  ASSERT_TRUE(mask_a.same_grid(mask_b));
+  double sum = 0;
+  for (std::int64_t k = 0; k < mask_a.size(2); ++k)
+    for (std::int64_t j = 0; j < mask_a.size(1); ++j)
+      for (std::int64_t i = 0; i < mask_a.size(0); ++i) {
+        EXPECT_EQ(mask_a(i, j, k), mask_b(i, j, k));
+        sum += mask_a(i, j, k);
+      }
+  EXPECT_GT(sum, 1000);  // a ball of radius 9 mm in 1.3 mm³ voxels: about 2300
+  const nlohmann::json cli_report = read_json(dir / "cli.json");
+  for (const auto& [k, v] : cli_report.items()) {
+    ASSERT_TRUE(view_report.contains(k)) << k;
+    if (k == "seconds" || k == "phase_seconds" || k == "surface" || k == "mask") continue;
+    EXPECT_EQ(view_report[k], v) << k;
+  }
+  EXPECT_EQ(view_report.size(), cli_report.size());
+
+  // The screenshot: the balloon (orange) in the 3-D view; on the axial slice its contour (red)
+  // and the seed's cross (green) where the click was.
+  const test::Png png = test::read_png(dir / "shots" / "segment.png");
+  ASSERT_EQ(png.w, kWidth);
+  ASSERT_EQ(png.h, kHeight);
+  EXPECT_GT(count(png, k3d, [](int red, int green, int blue) { return red > 90 && red > green + 25 && green > blue + 10; }), 400);
+  EXPECT_GT(count(png, kAxial, [](int red, int green, int blue) { return red > 200 && green < 90 && blue < 90; }), 30);
+  const view::PixelRect around{px - 12, py - 12, 25, 25};
+  EXPECT_GT(count(png, around, [](int red, int green, int blue) { return green > 200 && red < 120 && blue < 150; }), 3);
+  // Outside the ball the slice is dark grey, inside bright: the window/level spans the CT.
+  const auto* inside = png.at(int(px) + 7, int(py) + 7);
+  EXPECT_GT(int(inside[0]), 150);
+}
+
+TEST_F(ViewWindow, RecordedSessionReplaysToTheSameSeed) {
+  const view::SliceView axial(2, ct.size(), ct.spacing(), kAxial);
+  const auto [px, py] = axial.pixel_of(12, 18);
+  const nlohmann::json input = {mouse(1, "mouse_move", px, py), mouse(2, "mouse_down", px, py),
+                                mouse(3, "mouse_up", px, py)};
+  nlohmann::json events = input;
+  events.push_back(wait(4, "segment_done"));
+  events.push_back(event(5, "quit"));
+  write_script(dir / "live.json", events);
+  const auto r = run_view(fmt::format("{} --script {} --record {}", ct_path.string(), (dir / "live.json").string(),
+                                      (dir / "rec.json").string()),
+                          dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // The recording holds the input events (not the script's instructions), where they happened.
+  nlohmann::json rec = read_json(dir / "rec.json");
+  ASSERT_EQ(rec["events"].size(), input.size()) << rec.dump();
+  for (std::size_t i = 0; i < input.size(); ++i) {
+    EXPECT_EQ(rec["events"][i]["type"], input[i]["type"]);
+    EXPECT_EQ(rec["events"][i]["x"].get<double>(), px);
+    EXPECT_EQ(rec["events"][i]["y"].get<double>(), py);
+  }
+  EXPECT_EQ(rec["window"], nlohmann::json({kWidth, kHeight}));
+  // Replayed (with a save added at its end), the recording places the same seed.
+  const std::int64_t last = rec["events"].back()["frame"].get<std::int64_t>();
+  rec["events"].push_back(wait(last + 1, "segment_done"));
+  rec["events"].push_back(key(last + 2, "key_down", "s", true));
+  rec["events"].push_back(wait(last + 3, "idle"));
+  std::ofstream(dir / "replay.json") << rec.dump(1);
+  const auto replay = run_view(fmt::format("{} --script {} --report {}", ct_path.string(),
+                                           (dir / "replay.json").string(), (dir / "replay_report.json").string()),
+                               dir);
+  ASSERT_EQ(replay.exit_code, 0) << replay.err;
+  const nlohmann::json report = read_json(dir / "replay_report.json");
+  const Vec3 expected = ct.index_to_world(Vec3(12, 18, 13));
+  for (int c = 0; c < 3; ++c) EXPECT_EQ(report["seeds_mm"][0][std::size_t(c)].get<double>(), expected[c]);
+}
+
+TEST_F(ViewWindow, SurfacesAndTetMeshesShowInTheSceneView) {
+  io::write_triangle_mesh(dir / "ball.stl", segment::balloon_icosphere(Vec3(0, 0, 0), 10.0, 3));
+  geometry::TetMesh cube;  // a cube [25, 45]³ in 5 tetrahedra
+  for (int c = 0; c < 8; ++c) cube.vertices.push_back(Vec3(c & 1 ? 45 : 25, c & 2 ? 45 : 25, c & 4 ? 45 : 25) - Vec3(0, 35, 35));
+  cube.tets = {{0, 1, 2, 4}, {1, 3, 2, 7}, {1, 4, 5, 7}, {2, 4, 7, 6}, {1, 2, 4, 7}};
+  for (Tet& t : cube.tets) {
+    const auto& v = cube.vertices;
+    const Vec3 a = v[std::size_t(t[0])];
+    if ((v[std::size_t(t[1])] - a).cross(v[std::size_t(t[2])] - a).dot(v[std::size_t(t[3])] - a) < 0) std::swap(t[2], t[3]);
+  }
+  io::write_tet_mesh(dir / "cube.vtu", cube);
+  write_script(dir / "scene.json", {[] {
+                                      auto e = event(2, "screenshot");
+                                      e["name"] = "scene.png";
+                                      return e;
+                                    }(),
+                                    event(3, "quit")});
+  const auto r = run_view(fmt::format("{} {} --script {} --screenshots {}", (dir / "ball.stl").string(),
+                                      (dir / "cube.vtu").string(), (dir / "scene.json").string(), (dir / "shots").string()),
+                          dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const test::Png png = test::read_png(dir / "shots" / "scene.png");
+  ASSERT_EQ(png.w, kWidth);
+  const view::PixelRect views{340, 0, 620, 640};
+  // The first object is drawn light grey, the second light blue; both are in view.
+  const int grey_px = count(png, views, [](int red, int green, int blue) { return red > 70 && std::abs(red - green) < 12 && blue >= green && blue - green < 20; });
+  const int blue_px = count(png, views, [](int red, int green, int blue) { return blue > 80 && blue > red + 40 && green > red + 15; });
+  EXPECT_GT(grey_px, 2000);
+  EXPECT_GT(blue_px, 2000);
+}
+
+TEST_F(ViewWindow, MeshWorkspaceTetrahedralisesLikeIdoTetmeshAndShowsTheSection) {
+  io::write_triangle_mesh(dir / "ball.ply", segment::balloon_icosphere(Vec3(3, -2, 5), 10.0, 3));
+  nlohmann::json shot = event(8, "screenshot");
+  shot["name"] = "mesh.png";
+  write_script(dir / "mesh.json", {key(1, "key_down", "f3", false), key(2, "key_up", "f3", false),
+                                   key(3, "key_down", "t", false), key(4, "key_up", "t", false), wait(5, "idle"),
+                                   key(6, "key_down", "s", true), wait(7, "idle"), shot, event(9, "quit")});
+  const auto r = run_view(fmt::format("{} --script {} --screenshots {} --tet-output {}", (dir / "ball.ply").string(),
+                                      (dir / "mesh.json").string(), (dir / "shots").string(),
+                                      (dir / "view.vtu").string()),
+                          dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // The tetrahedra saved from the window are `ido tetmesh`'s for the same surface, byte for byte.
+  const auto cli = test::run_tool(fmt::format("tetmesh {} -o {} -q", (dir / "ball.ply").string(), (dir / "cli.vtu").string()));
+  ASSERT_EQ(cli.exit_code, 0) << cli.err;
+  const std::string view_bytes = slurp(dir / "view.vtu");
+  EXPECT_GT(view_bytes.size(), 1000u);
+  EXPECT_EQ(view_bytes, slurp(dir / "cli.vtu"));
+  // The clip plane through the middle removes the half nearer the camera: the section's faces
+  // (yellow, with the cut tetrahedra's edges dark) fill the middle of the view.
+  const test::Png png = test::read_png(dir / "shots" / "mesh.png");
+  ASSERT_EQ(png.w, kWidth);
+  auto section = [](int red, int green, int blue) { return red > 150 && green > 110 && blue < 110 && red > blue + 80; };
+  const view::PixelRect views{340, 0, 620, 640};
+  EXPECT_GT(count(png, views, section), 5000);
+  EXPECT_GT(count(png, {640, 310, 20, 20}, section), 200);
+  // Around it the boundary of the kept half (light blue).
+  EXPECT_GT(count(png, views, [](int red, int green, int blue) { return blue > 80 && blue > red + 40 && green > red + 15; }), 1000);
+}
+
+TEST_F(ViewWindow, DrillSessionByMouseReplaysInIdoDrillToTheSameRemovedVolume) {
+  // A 16 × 16 × 8 mm block; the burr (radius 2 mm) starts 4 mm above its top centre.
+  ASSERT_EQ(test::run_tool(fmt::format("tetmesh --shape block:16,16,8 -o {} -q", (dir / "block.vtu").string())).exit_code, 0);
+  // Drill workspace (f4), start (d), drag the burr down into the block over 20 frames, hold,
+  // stop (d), wait until the session has drained (20 frames: the session lasts as long as they do).
+  nlohmann::json events = nlohmann::json::array(
+      {key(1, "key_down", "f4", false), key(2, "key_up", "f4", false), key(3, "key_down", "d", false),
+       key(4, "key_up", "d", false), mouse(5, "mouse_down", 650, 320)});
+  double y = 320;
+  for (int f = 6; f < 26; ++f) events.push_back(mouse(f, "mouse_move", 650, y += 9));
+  events.push_back(mouse(26, "mouse_up", 650, y));
+  for (const auto& e : {key(30, "key_down", "d", false), key(31, "key_up", "d", false), wait(32, "idle")}) events.push_back(e);
+  nlohmann::json shot = event(33, "screenshot");
+  shot["name"] = "drill.png";
+  events.push_back(shot);
+  events.push_back(event(34, "quit"));
+  write_script(dir / "drill.json", events);
+  const auto r = run_view(fmt::format("{} --script {} --screenshots {} --drill-path {} --drill-report {}",
+                                      (dir / "block.vtu").string(), (dir / "drill.json").string(),
+                                      (dir / "shots").string(), (dir / "path.csv").string(),
+                                      (dir / "view_drill.json").string()),
+                          dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json view_report = read_json(dir / "view_drill.json");
+  const double removed = view_report["removed_volume_mm3"].get<double>();
+  EXPECT_GT(removed, 20.0) << "the burr went 7 mm deep: a hole of tens of mm³";
+  EXPECT_LT(removed, 2048.0);
+  // The path, one row per haptic tick, replayed by `ido drill` removes the same volume (the
+  // threads sample it at their own instants: within 2 %).
+  const std::string csv = slurp(dir / "path.csv");
+  EXPECT_GT(std::count(csv.begin(), csv.end(), '\n'), 500);
+  const auto cli = test::run_tool(fmt::format("drill {} --tool sphere:radius=2 --path {} -o {} --report {} -q",
+                                              (dir / "block.vtu").string(), (dir / "path.csv").string(),
+                                              (dir / "out.vtu").string(), (dir / "cli_drill.json").string()));
+  ASSERT_EQ(cli.exit_code, 0) << cli.err;
+  const double replayed = read_json(dir / "cli_drill.json")["removed_volume_mm3"].get<double>();
+  EXPECT_TRUE(test::rel_near(removed, replayed, 0.02)) << removed << " vs " << replayed;
+  // The window shows the drilled block (flat-shaded material colour) with the hole in its top.
+  const test::Png png = test::read_png(dir / "shots" / "drill.png");
+  ASSERT_EQ(png.w, kWidth);
+  const view::PixelRect views{340, 0, 620, 640};
+  EXPECT_GT(count(png, views, [](int red, int green, int blue) { return red > 100 && red >= green && green > blue + 10 && red - blue < 90; }), 20000);
+}
+
+TEST_F(ViewWindow, PulledPointMovesAndSpringsBackWithAColourBar) {
+  // A 40 × 10 × 10 mm soft beam clamped at x = 0, no gravity, damped: at rest until pulled.
+  // dt is small enough for the explicit RK4 the test switches to (the next name after
+  // implicit_euler).
+  std::ofstream(dir / "beam.json") << R"({
+    "dt_s": 0.001, "steps": 1, "integrator": "implicit_euler",
+    "damping": {"rayleigh_mass_per_s": 5.0, "rayleigh_stiffness_s": 0.0},
+    "bodies": [{"name": "beam", "mesh": {"generator": "beam", "size_mm": [40, 10, 10], "cells": [8, 2, 2]},
+                "model": "corotational_fem",
+                "material": {"youngs_modulus_pa": 2e3, "poisson_ratio": 0.3, "density_kg_m3": 1000},
+                "fixed": [{"box_min_mm": [-1, -1, -1], "box_max_mm": [0.001, 11, 11]}]}]})";
+  // Where the window shows the tip's top corner (the 3-D view frames the scene's box).
+  view::OrbitCamera cam;
+  cam.frame(Vec3(0, 0, 0), Vec3(40, 10, 10));
+  const viz::Camera c = cam.camera();
+  // The Deform workspace's 3-D view leaves the view area's right 120 px to the colour bar.
+  const Vec4 clip = c.projection_matrix(500.0 / 640.0) * c.view_matrix() * Vec4(40, 0, 10, 1);
+  const double tx = 340 + (clip.x() / clip.w() + 1) / 2 * 500, ty = (1 - clip.y() / clip.w()) / 2 * 640;
+  // Deform workspace (f5), run (space), press on the tip and drag 150 px down, hold, release.
+  nlohmann::json events = nlohmann::json::array({key(1, "key_down", "f5", false), key(2, "key_up", "f5", false),
+                                                 key(3, "key_down", "space", false), key(4, "key_up", "space", false),
+                                                 mouse(10, "mouse_down", tx, ty)});
+  for (int f = 11; f <= 30; ++f) events.push_back(mouse(f, "mouse_move", tx, ty + 7.5 * (f - 10)));
+  nlohmann::json pulled = event(80, "screenshot");
+  pulled["name"] = "pulled.png";
+  events.push_back(pulled);
+  events.push_back(mouse(81, "mouse_up", tx, ty + 150));
+  // Switch the integrator (i) while it swings back: between two steps, and the run goes on.
+  events.push_back(key(84, "key_down", "i", false));
+  events.push_back(key(85, "key_up", "i", false));
+  nlohmann::json settle = wait(86, "deform_steps");  // 1.5 s of simulated time (damping 5/s)
+  settle["steps"] = 1500;
+  events.push_back(settle);
+  events.push_back(event(90, "quit"));
+  write_script(dir / "pull.json", events);
+  const auto r = run_view(fmt::format("{} --script {} --screenshots {} --deform-log {}", (dir / "beam.json").string(),
+                                      (dir / "pull.json").string(), (dir / "shots").string(), (dir / "log.json").string()),
+                          dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json log = read_json(dir / "log.json");
+  ASSERT_GE(log["particle"].get<int>(), 0) << "the press found no surface point";
+  const Vec3 rest(log["rest_mm"][0].get<double>(), log["rest_mm"][1].get<double>(), log["rest_mm"][2].get<double>());
+  EXPECT_GT(rest.x(), 35.0) << "the grabbed point is at the free end";
+  double pulled_mm = 0, last_mm = -1;
+  bool released = false;
+  std::set<std::string> integrators;
+  std::int64_t steps_at_release = 0, last_steps = 0;
+  for (const auto& s : log["samples"]) {
+    const Vec3 p(s["position_mm"][0].get<double>(), s["position_mm"][1].get<double>(), s["position_mm"][2].get<double>());
+    const double d = (p - rest).norm();
+    integrators.insert(s["integrator"].get<std::string>());
+    if (s["grabbed"].get<bool>()) {
+      pulled_mm = std::max(pulled_mm, d);
+    } else if (pulled_mm > 0) {
+      if (!released) steps_at_release = s["steps"].get<std::int64_t>();
+      released = true;
+      last_mm = d;
+      last_steps = s["steps"].get<std::int64_t>();
+    }
+  }
+  EXPECT_GT(pulled_mm, 2.0) << "the spring to the cursor pulls the tip down";
+  ASSERT_TRUE(released);
+  EXPECT_GT(last_steps, steps_at_release + 50);
+  EXPECT_LT(last_mm, 0.25 * pulled_mm) << "released, the beam springs back towards its rest shape";
+  EXPECT_EQ(integrators.size(), 2u) << "the integrator was switched between steps";
+  // The picture has the colour bar (viridis, maximum at the top) beside the beam.
+  const test::Png png = test::read_png(dir / "shots" / "pulled.png");
+  ASSERT_EQ(png.w, kWidth);
+  const auto* top = png.at(960 - 100 + 11, 70);
+  const auto* bottom = png.at(960 - 100 + 11, 640 - 70);
+  EXPECT_TRUE(top[0] > 180 && top[1] > 180 && top[2] < 120) << int(top[0]) << "," << int(top[1]) << "," << int(top[2]);
+  EXPECT_TRUE(bottom[0] > 40 && bottom[1] < 60 && bottom[2] > 70) << int(bottom[0]) << "," << int(bottom[1]) << "," << int(bottom[2]);
+}
+
+TEST_F(ViewWindow, BadInputIsExitTwoAndNoDisplayIsExitOne) {
+  auto r = run_view(fmt::format("{} --script {}", ct_path.string(), (dir / "missing.json").string()), dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("missing.json"), std::string::npos) << r.err;
+  nlohmann::json shot = event(1, "screenshot");
+  shot["name"] = "x.png";
+  write_script(dir / "shot.json", nlohmann::json::array({shot}));
+  r = run_view(fmt::format("{} --script {}", ct_path.string(), (dir / "shot.json").string()), dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--screenshots"), std::string::npos) << r.err;
+  r = run_view(fmt::format("{} --seed-voxel 99,0,0 --frames 1", ct_path.string()), dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--seed-voxel 99,0,0"), std::string::npos) << r.err;
+  r = run_view(fmt::format("{} --surface {} --frames 1", ct_path.string(), (dir / "s.txt").string()), dir);
+  EXPECT_EQ(r.exit_code, 2);
+  // Without a display the window cannot open: one line saying so, exit 1.
+  const int status = std::system(fmt::format("env -u DISPLAY -u WAYLAND_DISPLAY {} view {} --frames 1 >{} 2>&1",
+                                             test::tool_path().string(), ct_path.string(),
+                                             (dir / "nodisplay.txt").string())
+                                     .c_str());
+  EXPECT_EQ(WIFEXITED(status) ? WEXITSTATUS(status) : -1, 1);
+  EXPECT_NE(slurp(dir / "nodisplay.txt").find("display"), std::string::npos) << slurp(dir / "nodisplay.txt");
+}
+
+}  // namespace
+}  // namespace ido
