@@ -23,6 +23,7 @@
 #include "ido/segment/balloon.h"
 #include "ido/segment/calcification.h"
 #include "ido/segment/organ.h"
+#include "ido/view/segment_output.h"
 #include "ido/viz/renderer.h"
 #include "snapshots.h"
 
@@ -136,23 +137,6 @@ image::Volume<float> seed_slice(const image::Volume<float>& ct, const Vec3& seed
   return out;
 }
 
-/// The leak control's part of the report: the seed region's radius, the chamber radius, the
-/// neighbour markers and every leak event.
-nlohmann::json leak_control_json(const segment::BalloonReport& rep) {
-  nlohmann::json events = nlohmann::json::array(), markers = nlohmann::json::array();
-  for (const segment::LeakEvent& e : rep.leaks)
-    events.push_back({{"cause", segment::leak_cause_name(e.cause)},
-                      {"position_mm", {e.position_mm.x(), e.position_mm.y(), e.position_mm.z()}},
-                      {"iteration", e.iteration},
-                      {"neck_area_mm2", e.neck_area_mm2},
-                      {"neck_radius_mm", e.neck_radius_mm}});
-  for (const Vec3& m : rep.neighbour_markers_mm) markers.push_back({m.x(), m.y(), m.z()});
-  return {{"seed_radius_mm", rep.seed_radius_mm},
-          {"chamber_radius_mm", std::isfinite(rep.chamber_radius_mm) ? nlohmann::json(rep.chamber_radius_mm) : nlohmann::json(nullptr)},
-          {"neighbour_markers_mm", markers},
-          {"events", events}};
-}
-
 void run(const SegmentCliOptions& o, const GlobalOptions& g) {
   if (o.seeds.empty() && o.seed_voxels.empty()) throw InvalidInput("give at least one --seed X,Y,Z or --seed-voxel I,J,K");
   check_balloon_arguments("--", o.reference, o.tolerance, o.edge_reach_voxels, o.outside_level);
@@ -244,47 +228,7 @@ void run(const SegmentCliOptions& o, const GlobalOptions& g) {
   if (!o.mask.empty()) io::write_volume(o.mask, segment::surface_to_mask(r.surface, ct));
   const segment::BalloonReport& rep = r.report;
   if (!o.report.empty()) {
-    nlohmann::json seeds_json = nlohmann::json::array();
-    for (const Vec3& s : seeds) seeds_json.push_back({s.x(), s.y(), s.z()});
-    nlohmann::json j = {
-        {"input", o.input},
-        {"seeds_mm", seeds_json},
-        {"reference", rep.model.reference},
-        {"tolerance", rep.model.tolerance},
-        {"accept_brighter", rep.model.accept_brighter},
-        {"iterations", rep.iterations},
-        {"organ", o.organ},
-        {"edge_reach_voxels", bo.edge_reach_voxels},
-        {"outside_level", bo.outside_level ? nlohmann::json(*bo.outside_level) : nlohmann::json(nullptr)},
-        {"leak_control", leak_control_json(rep)},
-        {"seconds", rep.seconds},
-        {"phase_seconds",
-         {{"setup", rep.phase_seconds.setup},
-          {"move", rep.phase_seconds.move},
-          {"remesh", rep.phase_seconds.remesh},
-          {"intersections", rep.phase_seconds.intersections},
-          {"repair", rep.phase_seconds.repair}}},
-        {"volume_mm3", rep.volume_mm3},
-        {"area_mm2", rep.area_mm2},
-        {"vertices", rep.vertices},
-        {"edges", rep.edges},
-        {"triangles", rep.triangles},
-        {"euler_characteristic", rep.euler_characteristic},
-        {"components", rep.components},
-        {"closed", rep.closed},
-        {"manifold", rep.manifold},
-        {"oriented", rep.oriented},
-        {"self_intersections", rep.self_intersections},
-        {"repairs", rep.repairs},
-        {"local_repairs", rep.local_repairs},
-        {"inflation_vertex_steps", rep.inflation_vertex_steps},
-        {"slept_vertex_steps", rep.slept_vertex_steps},
-        {"frozen_vertices", rep.frozen_vertices},
-        {"converged", rep.converged},
-        {"stop_reason", rep.stop_reason},
-        {"leak_warning", rep.leak_warning},
-        {"surface", o.output},
-        {"mask", o.mask.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.mask)}};
+    nlohmann::json j = view::segment_report_json({o.input, seeds, organ, bo}, r, {o.output, o.mask, o.report});
     if (calcified)
       j["calcification"] = {{"threshold", *o.calcium},
                             {"reach_mm", o.calcium_reach_mm},

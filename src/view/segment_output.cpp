@@ -24,9 +24,8 @@ void check_segment_outputs(const SegmentOutputs& o) {
         fmt::format("{}: the mask output must be a volume file (.nii, .nii.gz, .nrrd, .mha)", o.mask.string()));
 }
 
-std::string segment_report_json(const SegmentRequest& request, const segment::BalloonResult& result,
-                                const SegmentOutputs& outputs) {
-  // The same document as apps/ido/cmd_segment.cpp writes (without --calcium / --snapshots).
+nlohmann::json segment_report_json(const SegmentRequest& request, const segment::BalloonResult& result,
+                                   const SegmentOutputs& outputs) {
   const segment::BalloonReport& rep = result.report;
   const segment::BalloonOptions& bo = request.options;
   nlohmann::json seeds = nlohmann::json::array();
@@ -45,7 +44,7 @@ std::string segment_report_json(const SegmentRequest& request, const segment::Ba
        std::isfinite(rep.chamber_radius_mm) ? nlohmann::json(rep.chamber_radius_mm) : nlohmann::json(nullptr)},
       {"neighbour_markers_mm", markers},
       {"events", events}};
-  const nlohmann::json j = {
+  return {
       {"input", request.input},
       {"seeds_mm", seeds},
       {"reference", rep.model.reference},
@@ -84,7 +83,6 @@ std::string segment_report_json(const SegmentRequest& request, const segment::Ba
       {"leak_warning", rep.leak_warning},
       {"surface", outputs.surface.empty() ? nlohmann::json(nullptr) : nlohmann::json(outputs.surface.string())},
       {"mask", outputs.mask.empty() ? nlohmann::json(nullptr) : nlohmann::json(outputs.mask.string())}};
-  return j.dump(2) + "\n";
 }
 
 void save_segmentation(const SegmentOutputs& outputs, const image::Volume<float>& ct, const SegmentRequest& request,
@@ -92,7 +90,7 @@ void save_segmentation(const SegmentOutputs& outputs, const image::Volume<float>
   if (!outputs.surface.empty()) io::write_triangle_mesh(outputs.surface, result.surface);
   if (!outputs.mask.empty()) io::write_volume(outputs.mask, segment::surface_to_mask(result.surface, ct));
   if (!outputs.report.empty()) {
-    const std::string text = segment_report_json(request, result, outputs);
+    const std::string text = segment_report_json(request, result, outputs).dump(2) + "\n";
     write_file_atomically(outputs.report, [&](std::ostream& out) { out << text; }, false);
   }
 }

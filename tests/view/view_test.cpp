@@ -448,7 +448,7 @@ TEST(SegmentOutput, ReportRecordsSeedsOrganAndSurfaceFigures) {
   const std::vector<Vec3> seeds = {ct->index_to_world(Vec3(16, 15, 14))};
   view::SegmentRequest request{"ct.nii.gz", seeds, segment::Organ::Artery, segment::organ_options(segment::Organ::Artery)};
   const segment::BalloonResult r = segment::segment_balloon(*ct, seeds, request.options);
-  const auto j = nlohmann::json::parse(view::segment_report_json(request, r, {"s.stl", "", "r.json"}));
+  const nlohmann::json j = view::segment_report_json(request, r, {"s.stl", "", "r.json"});
   EXPECT_EQ(j["seeds_mm"][0][0].get<double>(), seeds[0].x());
   EXPECT_EQ(j["seeds_mm"][0][2].get<double>(), seeds[0].z());
   EXPECT_EQ(j["organ"], "artery");
