@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 
 #include "ido/core/error.h"
 
@@ -15,22 +16,6 @@ void check_quantile(double q) {
 }
 
 }  // namespace
-
-double percentile(std::vector<double> values, double q) {
-  check_quantile(q);
-  if (values.empty()) throw InvalidInput("percentile of an empty sample");
-  // Two selections instead of a sort: the order statistic at floor(rank), then the smallest
-  // value above it.
-  const double pos = q * double(values.size() - 1);
-  const auto i = std::size_t(pos);
-  const double f = pos - double(i);
-  const auto it = values.begin() + std::ptrdiff_t(i);
-  std::nth_element(values.begin(), it, values.end());
-  const double lo = *it;
-  if (f == 0.0 || i + 1 >= values.size()) return lo;
-  const double hi = *std::min_element(it + 1, values.end());
-  return lo + f * (hi - lo);
-}
 
 namespace {
 
@@ -66,6 +51,8 @@ std::vector<double> percentiles(std::vector<double> values, const std::vector<do
 std::vector<double> percentiles(std::vector<float> values, const std::vector<double>& qs) {
   return select_quantiles(std::move(values), qs);
 }
+
+double percentile(std::vector<double> values, double q) { return select_quantiles(std::move(values), {q}).front(); }
 
 double median(std::vector<double> values) { return percentile(std::move(values), 0.5); }
 
