@@ -8,11 +8,10 @@
 #include <string>
 
 #include <fmt/format.h>
-#include <nlohmann/json.hpp>
-
 #include "command.h"
 #include "ido/core/error.h"
 #include "ido/io/mesh_io.h"
+#include "ido/io/report_json.h"
 #include "ido/io/volume_io.h"
 #include "ido/segment/metrics.h"
 
@@ -47,7 +46,6 @@ image::Volume<std::uint8_t> read_level_set_mask(const std::string& path, double 
   return read_mask_where(path, [level](float x) { return static_cast<double>(x) < level; });
 }
 
-nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
 void run(const CompareOptions& o) {
   if (o.mask.empty() == o.mesh.empty()) throw InvalidInput("give exactly one of --mask and --mesh");
@@ -66,21 +64,10 @@ void run(const CompareOptions& o) {
   const segment::SegmentationScores s =
       o.mask.empty() ? mesh_scores() : segment::compare_masks(read_mask(o.mask, o.label), truth);
   if (o.json) {
-    const nlohmann::json j = {{"mask", o.mask.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.mask)},
-                              {"mesh", o.mesh.empty() ? nlohmann::json(nullptr) : nlohmann::json(o.mesh)},
-                              {"truth", o.truth},
-                              {"dice", s.dice},
-                              {"hd95_mm", number(s.hd95_mm)},
-                              {"assd_mm", number(s.assd_mm)},
-                              {"hausdorff_mm", number(s.hd_mm)},
-                              {"volume_ratio", number(s.volume_ratio)},
-                              {"volume_mask_mm3", s.volume_mask_mm3},
-                              {"volume_truth_mm3", s.volume_truth_mm3},
-                              {"voxels_mask", s.voxels_mask},
-                              {"voxels_truth", s.voxels_truth},
-                              {"components_mask", s.components_mask},
-                              {"components_truth", s.components_truth},
-                              {"resampled_to_truth_grid", s.resampled}};
+    io::Json j = {{"mask", o.mask.empty() ? io::Json(nullptr) : io::Json(o.mask)},
+                  {"mesh", o.mesh.empty() ? io::Json(nullptr) : io::Json(o.mesh)},
+                  {"truth", o.truth}};
+    j.update(io::to_json(s));
     std::printf("%s\n", j.dump(2).c_str());
     return;
   }

@@ -7,10 +7,12 @@
 #include <nlohmann/json.hpp>
 
 #include "command.h"
+#include "ido/geometry/aabb.h"
 #include "ido/geometry/mesh_checks.h"
 #include "ido/geometry/tet_quality.h"
 #include "ido/io/file_info.h"
 #include "ido/io/mesh_io.h"
+#include "ido/io/report_json.h"
 #include "ido/io/volume_io.h"
 
 namespace ido::cli {
@@ -62,55 +64,32 @@ json volume_json(const std::string& path) {
 json triangle_json(const std::string& path) {
   const auto mesh = io::read_triangle_mesh(path);
   const auto r = geometry::check_mesh(mesh);
-  const auto b = io::point_bounds(mesh.vertices);
+  const geometry::Aabb b = geometry::Aabb::of(mesh.vertices);
   json j = {{"file", path},
             {"kind", "triangle_mesh"},
             {"vertices", mesh.vertices.size()},
             {"triangles", mesh.triangles.size()},
-            {"bounds_min_mm", vec(b[0])},
-            {"bounds_max_mm", vec(b[1])},
+            {"bounds_min_mm", b.empty() ? json(nullptr) : vec(b.min)},
+            {"bounds_max_mm", b.empty() ? json(nullptr) : vec(b.max)},
             {"point_fields", fields_json(mesh.point_fields)},
             {"cell_fields", fields_json(mesh.cell_fields)}};
-  j["checks"] = {{"referenced_vertices", r.vertices},
-                 {"edges", r.edges},
-                 {"closed", r.closed},
-                 {"edge_manifold", r.edge_manifold},
-                 {"vertex_manifold", r.vertex_manifold},
-                 {"oriented", r.oriented},
-                 {"euler_characteristic", r.euler_characteristic},
-                 {"components", r.components},
-                 {"genus", r.genus ? json(*r.genus) : json(nullptr)},
-                 {"boundary_edges", r.boundary_edges},
-                 {"non_manifold_edges", r.non_manifold_edges},
-                 {"non_manifold_vertices", r.non_manifold_vertices},
-                 {"degenerate_triangles", r.degenerate_triangles},
-                 {"area_mm2", r.area_mm2},
-                 {"signed_volume_mm3", r.signed_volume_mm3}};
+  j["checks"] = io::to_json(r);
   return j;
 }
 
 json tet_json(const std::string& path) {
   const auto mesh = io::read_tet_mesh(path);
   const auto r = geometry::check_tet_mesh(mesh);
-  const auto b = io::point_bounds(mesh.vertices);
+  const geometry::Aabb b = geometry::Aabb::of(mesh.vertices);
   json j = {{"file", path},
             {"kind", "tet_mesh"},
             {"vertices", mesh.vertices.size()},
             {"tets", mesh.tets.size()},
-            {"bounds_min_mm", vec(b[0])},
-            {"bounds_max_mm", vec(b[1])},
+            {"bounds_min_mm", b.empty() ? json(nullptr) : vec(b.min)},
+            {"bounds_max_mm", b.empty() ? json(nullptr) : vec(b.max)},
             {"point_fields", fields_json(mesh.point_fields)},
             {"cell_fields", fields_json(mesh.cell_fields)}};
-  j["checks"] = {{"inverted", r.inverted},
-                 {"degenerate", r.degenerate},
-                 {"volume_mm3", r.volume_mm3},
-                 {"min_dihedral_deg", r.min_dihedral_deg},
-                 {"max_dihedral_deg", r.max_dihedral_deg},
-                 {"min_mean_ratio", r.min_mean_ratio},
-                 {"mean_mean_ratio", r.mean_mean_ratio},
-                 {"boundary_faces", r.boundary_faces},
-                 {"boundary_closed", r.boundary_closed},
-                 {"boundary_manifold", r.boundary_manifold}};
+  j["checks"] = io::to_json(r);
   return j;
 }
 

@@ -33,6 +33,7 @@
 #include "ido/geometry/mesh_checks.h"
 #include "ido/geometry/tet_quality.h"
 #include "ido/io/mesh_io.h"
+#include "ido/io/report_json.h"
 #include "ido/io/scene.h"
 #include "ido/io/volume_io.h"
 #include "ido/meshing/distance_field.h"
@@ -45,7 +46,7 @@
 namespace ido::cli {
 namespace {
 namespace fs = std::filesystem;
-using nlohmann::json;
+using json = io::Json;
 
 struct Options {
   std::string ct;
@@ -90,25 +91,6 @@ std::vector<Vec3> collect_seeds(const std::vector<std::string>& world, const std
   return seeds;
 }
 
-json mesh_check_json(const geometry::MeshCheckReport& r) {
-  return {{"vertices", r.vertices},
-          {"edges", r.edges},
-          {"triangles", r.triangles},
-          {"closed", r.closed},
-          {"manifold", r.edge_manifold && r.vertex_manifold},
-          {"oriented", r.oriented},
-          {"euler_characteristic", r.euler_characteristic},
-          {"components", r.components},
-          {"area_mm2", r.area_mm2},
-          {"volume_mm3", r.signed_volume_mm3}};
-}
-
-json scores_json(const segment::SegmentationScores& s) {
-  return {{"dice", s.dice},         {"hd95_mm", s.hd95_mm},
-          {"assd_mm", s.assd_mm},   {"volume_ratio", s.volume_ratio},
-          {"components", s.components_mask}, {"truth_components", s.components_truth}};
-}
-
 image::Volume<std::uint8_t> label_mask(const image::Volume<float>& labels, int label) {
   auto mask = labels.like<std::uint8_t>(0);
   for (std::size_t i = 0; i < labels.voxel_count(); ++i)
@@ -125,18 +107,6 @@ Organ segment_organ(const std::string& name, const image::Volume<float>& ct, con
   return organ;
 }
 
-json balloon_json(const segment::BalloonReport& r) {
-  return {{"reference_hu", r.model.reference}, {"tolerance_hu", r.model.tolerance},
-          {"iterations", r.iterations},        {"seconds", r.seconds},
-          {"volume_mm3", r.volume_mm3},        {"area_mm2", r.area_mm2},
-          {"vertices", r.vertices},            {"triangles", r.triangles},
-          {"euler_characteristic", r.euler_characteristic},
-          {"closed", r.closed},                {"manifold", r.manifold},
-          {"self_intersections", r.self_intersections},
-          {"converged", r.converged},          {"leak_warning", r.leak_warning},
-          {"stop_reason", r.stop_reason}};
-}
-
 /// Axial slice through @p point with each organ's contour, and a 3D view of the surfaces.
 void organ_pictures(const image::Volume<float>& ct, const std::vector<const Organ*>& organs, const Vec3& point,
                     const fs::path& dir, json& pictures) {
@@ -149,8 +119,8 @@ void organ_pictures(const image::Volume<float>& ct, const std::vector<const Orga
     for (std::size_t i = 0; i < organs.size(); ++i) r.add_contour(organs[i]->mask, 2, k, colours[i % 3]);
     r.set_camera(r.slice_camera(0));
     r.write_png(dir / "ct_slice_contours.png");
-    pictures.push_back({{"file", "ct_slice_contours.png"},
-                        {"what", fmt::format("CT slice k={} with the segmentation contours", k)}});
+    pictures.push_back(json{{"file", "ct_slice_contours.png"},
+                            {"what", fmt::format("CT slice k={} with the segmentation contours", k)}});
   }
   {
     viz::Renderer r(900, 700);
@@ -158,25 +128,13 @@ void organ_pictures(const image::Volume<float>& ct, const std::vector<const Orga
     for (std::size_t i = 0; i < organs.size(); ++i) r.add_surface(organs[i]->balloon.surface, surface_colours[i % 3]);
     r.set_camera(r.fit_camera(30, 20));
     r.write_png(dir / "surfaces.png");
-    pictures.push_back({{"file", "surfaces.png"}, {"what", "segmented surfaces"}});
+    pictures.push_back(json{{"file", "surfaces.png"}, {"what", "segmented surfaces"}});
   }
 }
 
 geometry::TetMesh mesh_organ(const Organ& organ, double edge_mm, Progress* progress) {
   const auto sdf = meshing::signed_distance_from_mask(organ.mask);
   return meshing::tetrahedralize(sdf, {.edge_mm = edge_mm}, progress);
-}
-
-json tet_quality_json(const geometry::TetMeshReport& q) {
-  return {{"vertices", q.vertices},
-          {"tets", q.tets},
-          {"inverted", q.inverted},
-          {"volume_mm3", q.volume_mm3},
-          {"min_dihedral_deg", q.min_dihedral_deg},
-          {"max_dihedral_deg", q.max_dihedral_deg},
-          {"min_mean_ratio", q.min_mean_ratio},
-          {"boundary_closed", q.boundary_closed},
-          {"boundary_manifold", q.boundary_manifold}};
 }
 
 /// The plane through the tool path's centroid that best holds the path (least variance of its
@@ -221,7 +179,7 @@ json run_drill(const Options& o, const geometry::TetMesh& mesh, const image::Vol
   io::write_triangle_mesh(dir / "drilled_surface.stl", surface);
   json r = drill_session_json(hierarchy, sim, so, before);
   r["path"] = o.drill_path;
-  r["surface_checks"] = mesh_check_json(geometry::check_mesh(surface));
+  r["surface_checks"] = io::to_json(geometry::check_mesh(surface));
 
   // Picture: the drilled mesh cut by the plane that best holds the tool path, seen face on and
   // coloured by refinement depth, so the whole channel shows as the refined band.
@@ -232,8 +190,8 @@ json run_drill(const Options& o, const geometry::TetMesh& mesh, const image::Vol
   const double azimuth = std::atan2(cut.normal.x(), -cut.normal.y()) * 180.0 / kPi;
   pic.set_camera(pic.fit_camera(azimuth, std::clamp(elevation, -89.0, 89.0)));
   pic.write_png(dir / "drilled_clip.png");
-  pictures.push_back({{"file", "drilled_clip.png"},
-                      {"what", "drilled mesh cut along the tool path, coloured by refinement depth (the channel)"}});
+  pictures.push_back(json{{"file", "drilled_clip.png"},
+                          {"what", "drilled mesh cut along the tool path, coloured by refinement depth (the channel)"}});
   return r;
 }
 
@@ -271,7 +229,7 @@ json run_deformation(const geometry::TetMesh& mesh, const fs::path& dir, int ste
   auto loaded = io::load_scene(sim_dir / "scene.json");
   const auto result = io::run_scene(loaded, sim_dir, progress);
   write_energy_plot(sim_dir / "energy.png", result);
-  pictures.push_back({{"file", "deformation/energy.png"}, {"what", "energy of the deforming vessel over time"}});
+  pictures.push_back(json{{"file", "deformation/energy.png"}, {"what", "energy of the deforming vessel over time"}});
   std::vector<double> ms = result.step_ms;
   std::sort(ms.begin(), ms.end());
   return {{"scene", "deformation/scene.json"},
@@ -279,11 +237,7 @@ json run_deformation(const geometry::TetMesh& mesh, const fs::path& dir, int ste
           {"frames", result.frames},
           {"wall_time_s", result.wall_time_s},
           {"ms_per_step_p50", ms.empty() ? 0.0 : ms[ms.size() / 2]},
-          {"final_energy_mj",
-           {{"kinetic", result.kinetic_mj.back()},
-            {"elastic", result.elastic_mj.back()},
-            {"gravitational", result.gravitational_mj.back()},
-            {"total", result.total_mj.back()}}}};
+          {"final_energy", io::to_json(result.final_energy)}};
 }
 
 json run_user_scene(const std::string& scene_path, const fs::path& dir, Progress* progress) {
@@ -292,7 +246,7 @@ json run_user_scene(const std::string& scene_path, const fs::path& dir, Progress
   auto scene = io::load_scene(scene_path);
   const auto result = io::run_scene(scene, sim_dir, progress);
   return {{"scene", scene_path}, {"frames", result.frames}, {"wall_time_s", result.wall_time_s},
-          {"final_total_energy_mj", result.total_mj.empty() ? 0.0 : result.total_mj.back()}};
+          {"final_energy", io::to_json(result.final_energy)}};
 }
 
 std::string summary_markdown(const json& report) {
@@ -330,7 +284,7 @@ std::string summary_markdown(const json& report) {
     const auto& d = report["deformation"];
     md += fmt::format("| deformation | {} steps, {:.1f} ms/step (p50), final elastic energy {:.4g} mJ |\n",
                       d["steps"].get<int>(), d["ms_per_step_p50"].get<double>(),
-                      d["final_energy_mj"]["elastic"].get<double>());
+                      d["final_energy"]["elastic_mj"].get<double>());
   }
   md += "\n## Pictures\n\n";
   for (const auto& p : report["pictures"])
@@ -365,9 +319,9 @@ void run(const Options& o, const GlobalOptions& g) {
 
   json report;
   report["input"] = o.ct;
-  report["pictures"] = json::array();
-  report["files"] = json::array();
-  auto& files = report["files"];
+  // The lists are kept apart until the end: report's keys live in a vector, so a reference
+  // into it would move as keys are added.
+  json pictures = json::array(), files = json::array();
   std::vector<Organ> organs;
   auto add_organ = [&](const std::string& name, const std::vector<Vec3>& seeds, bool bone, int label) {
     ido::logger().info("segmenting the {} from {} seed(s)", name, seeds.size());
@@ -388,12 +342,12 @@ void run(const Options& o, const GlobalOptions& g) {
                         {"roi_mm", roi ? json::array({{roi->min.x(), roi->min.y(), roi->min.z()},
                                                       {roi->max.x(), roi->max.y(), roi->max.z()}})
                                        : json(nullptr)}};
-    entry["balloon"] = balloon_json(organs.back().balloon.report);
-    entry["surface_checks"] = mesh_check_json(geometry::check_mesh(organs.back().balloon.surface));
+    entry["balloon"] = io::to_json(organs.back().balloon.report);
+    entry["surface_checks"] = io::to_json(geometry::check_mesh(organs.back().balloon.surface));
     if (truth) {
       const auto t = label_mask(*truth, label);
       if (std::count(t.data().begin(), t.data().end(), std::uint8_t{1}) > 0)
-        entry["scores"] = scores_json(segment::compare_masks(organs.back().mask, t));
+        entry["scores"] = io::to_json(segment::compare_masks(organs.back().mask, t));
     }
     report["segmentation"][name] = entry;
     files.push_back(name + "_surface.stl");
@@ -405,14 +359,14 @@ void run(const Options& o, const GlobalOptions& g) {
   std::vector<const Organ*> organ_ptrs;
   for (const auto& organ : organs) organ_ptrs.push_back(&organ);
   organ_pictures(ct, organ_ptrs, vessel_seeds.empty() ? bone_seeds.front() : vessel_seeds.front(), dir,
-                 report["pictures"]);
+                 pictures);
 
   // The drillable organ: the bone if one was segmented, else the vessel.
   const Organ& target = organs.back();
   const auto tets = mesh_organ(target, o.edge_mm, progress.get());
   io::write_tet_mesh(dir / (target.name + "_tets.vtu"), tets);
   files.push_back(target.name + "_tets.vtu");
-  report["tetmesh"] = {{"organ", target.name}, {"quality", tet_quality_json(geometry::check_tet_mesh(tets))}};
+  report["tetmesh"] = {{"organ", target.name}, {"quality", io::to_json(geometry::check_tet_mesh(tets))}};
   {
     viz::Renderer pic(900, 700);
     auto lo = tets.vertices.front(), hi = lo;
@@ -426,11 +380,11 @@ void run(const Options& o, const GlobalOptions& g) {
     pic.add_tet_mesh_clipped(tets, {.point = 0.5 * (lo + hi), .normal = Vec3(1, 0, 0)}, "", clip_options);
     pic.set_camera(pic.fit_camera(90, 10));
     pic.write_png(dir / "tetmesh_clip.png");
-    report["pictures"].push_back({{"file", "tetmesh_clip.png"}, {"what", "tetrahedral mesh, cut in half"}});
+    pictures.push_back(json{{"file", "tetmesh_clip.png"}, {"what", "tetrahedral mesh, cut in half"}});
   }
 
   if (!o.drill_path.empty()) {
-    report["drill"] = run_drill(o, tets, ct, dir, report["pictures"]);
+    report["drill"] = run_drill(o, tets, ct, dir, pictures);
     files.push_back("drilled.vtu");
     files.push_back("drilled_surface.stl");
   }
@@ -442,13 +396,15 @@ void run(const Options& o, const GlobalOptions& g) {
     const auto vessel = std::find_if(organs.begin(), organs.end(), [](const Organ& x) { return x.name == "vessel"; });
     if (vessel == organs.end()) throw InvalidInput("--deform needs a vessel (--seed)");
     const auto vessel_tets = vessel->name == target.name ? tets : mesh_organ(*vessel, o.edge_mm, progress.get());
-    report["deformation"] = run_deformation(vessel_tets, dir, static_cast<int>(o.deform_steps), report["pictures"],
-                                            progress.get());
+    report["deformation"] =
+        run_deformation(vessel_tets, dir, static_cast<int>(o.deform_steps), pictures, progress.get());
     files.push_back("deformation/");
   }
   report["wall_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   files.push_back("report.json");
   files.push_back("summary.md");
+  report["pictures"] = std::move(pictures);
+  report["files"] = std::move(files);
   write_text_file((dir / "report.json").string(), report.dump(2) + "\n");
   write_text_file((dir / "summary.md").string(), summary_markdown(report));
   if (!g.quiet) std::printf("pipeline finished in %.1f s; summary: %s\n", report["wall_time_s"].get<double>(),

@@ -5,7 +5,15 @@
 #pragma once
 #include <pybind11/pybind11.h>
 
+#include "ido/io/report_json.h"
+
 namespace ido::python {
+
+/// A report as Python values (dict, list, float, int, bool, None), through the library's one
+/// JSON form of it (io::to_json), so Python's keys are the CLI's.
+[[nodiscard]] inline pybind11::object to_python(const io::Json& report) {
+  return pybind11::module_::import("json").attr("loads")(report.dump());
+}
 
 /// ido.Volume (float32 voxels), ido.Mask (uint8 voxels), read_volume, write_volume.
 void bind_volume(pybind11::module_& m);

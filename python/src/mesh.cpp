@@ -60,29 +60,6 @@ std::vector<std::array<std::int32_t, N>> cells_from_array(const Cells& a, std::s
   return out;
 }
 
-py::dict check_dict(const geometry::MeshCheckReport& c) {
-  py::dict d;
-  d["vertices"] = c.vertices;
-  d["edges"] = c.edges;
-  d["triangles"] = c.triangles;
-  d["closed"] = c.closed;
-  d["edge_manifold"] = c.edge_manifold;
-  d["vertex_manifold"] = c.vertex_manifold;
-  d["oriented"] = c.oriented;
-  d["euler_characteristic"] = c.euler_characteristic;
-  d["components"] = c.components;
-  d["genus"] = c.genus ? py::object(py::int_(*c.genus)) : py::object(py::none());
-  d["boundary_edges"] = c.boundary_edges;
-  d["non_manifold_edges"] = c.non_manifold_edges;
-  d["non_manifold_vertices"] = c.non_manifold_vertices;
-  d["degenerate_triangles"] = c.degenerate_triangles;
-  d["area_mm2"] = c.area_mm2;
-  d["volume_mm3"] = c.signed_volume_mm3;
-  d["bounds_min"] = c.bounds_min;
-  d["bounds_max"] = c.bounds_max;
-  return d;
-}
-
 }  // namespace
 
 void bind_mesh(py::module_& m) {
@@ -189,7 +166,7 @@ void bind_mesh(py::module_& m) {
       py::arg("path"), py::arg("mesh"), py::arg("ascii") = false,
       "Writes a tetrahedral mesh (.vtu, .msh, .node by extension), atomically.");
   m.def(
-      "check_mesh", [](const TriangleMesh& mesh) { return check_dict(geometry::check_mesh(mesh)); }, py::arg("mesh"),
+      "check_mesh", [](const TriangleMesh& mesh) { return to_python(io::to_json(geometry::check_mesh(mesh))); }, py::arg("mesh"),
       "Closed, manifold and oriented flags, Euler characteristic, genus, components, area (mm²), enclosed volume "
       "(mm³) and bounds, as a dict.");
   m.def(

@@ -83,77 +83,13 @@ std::vector<Vec3> seed_points(const image::Volume<float>& ct, const std::vector<
   return out;
 }
 
-py::dict report_dict(const BalloonReport& r) {
-  py::dict d;
-  d["reference"] = r.model.reference;
-  d["tolerance"] = r.model.tolerance;
-  d["accept_brighter"] = r.model.accept_brighter;
-  d["iterations"] = r.iterations;
-  d["seconds"] = r.seconds;
-  py::dict phases;
-  phases["setup"] = r.phase_seconds.setup;
-  phases["move"] = r.phase_seconds.move;
-  phases["remesh"] = r.phase_seconds.remesh;
-  phases["intersections"] = r.phase_seconds.intersections;
-  phases["repair"] = r.phase_seconds.repair;
-  d["phase_seconds"] = phases;
-  d["volume_mm3"] = r.volume_mm3;
-  d["area_mm2"] = r.area_mm2;
-  d["vertices"] = r.vertices;
-  d["edges"] = r.edges;
-  d["triangles"] = r.triangles;
-  d["euler_characteristic"] = r.euler_characteristic;
-  d["components"] = r.components;
-  d["closed"] = r.closed;
-  d["manifold"] = r.manifold;
-  d["oriented"] = r.oriented;
-  d["self_intersections"] = r.self_intersections;
-  d["repairs"] = r.repairs;
-  d["local_repairs"] = r.local_repairs;
-  d["converged"] = r.converged;
-  d["stop_reason"] = r.stop_reason;
-  d["leak_warning"] = r.leak_warning;
-  py::list leaks;
-  for (const segment::LeakEvent& e : r.leaks) {
-    py::dict ev;
-    ev["cause"] = segment::leak_cause_name(e.cause);
-    ev["position_mm"] = e.position_mm;
-    ev["iteration"] = e.iteration;
-    ev["neck_area_mm2"] = e.neck_area_mm2;
-    ev["neck_radius_mm"] = e.neck_radius_mm;
-    leaks.append(ev);
-  }
-  d["leaks"] = leaks;
-  d["seed_radius_mm"] = r.seed_radius_mm;
-  d["chamber_radius_mm"] = r.chamber_radius_mm;
-  d["neighbour_markers_mm"] = r.neighbour_markers_mm;
-  return d;
-}
-
-py::dict scores_dict(const segment::SegmentationScores& s) {
-  py::dict d;
-  d["dice"] = s.dice;
-  d["hd95_mm"] = s.hd95_mm;
-  d["assd_mm"] = s.assd_mm;
-  d["hd_mm"] = s.hd_mm;
-  d["volume_ratio"] = s.volume_ratio;
-  d["components_mask"] = s.components_mask;
-  d["components_truth"] = s.components_truth;
-  d["voxels_mask"] = s.voxels_mask;
-  d["voxels_truth"] = s.voxels_truth;
-  d["volume_mask_mm3"] = s.volume_mask_mm3;
-  d["volume_truth_mm3"] = s.volume_truth_mm3;
-  d["resampled"] = s.resampled;
-  return d;
-}
-
 }  // namespace
 
 void bind_segment(py::module_& m) {
   py::class_<BalloonResult>(m, "Segmentation", "What ido.segment / Balloon.run produced: a surface and a report.")
       .def_readonly("surface", &BalloonResult::surface, "The closed, manifold surface (ido.TriangleMesh, mm).")
       .def_property_readonly(
-          "report", [](const BalloonResult& r) { return report_dict(r.report); },
+          "report", [](const BalloonResult& r) { return to_python(io::to_json(r.report)); },
           "Reference and tolerance used, iterations, seconds (and per phase), volume, area, V/E/F, Euler "
           "characteristic, closed / manifold / oriented flags, self-intersections (0), repairs, stop reason, leak "
           "warning.");
@@ -292,7 +228,7 @@ void bind_segment(py::module_& m) {
           py::gil_scoped_release unlocked;
           s = segment::compare_masks(mask, truth);
         }
-        return scores_dict(s);
+        return to_python(io::to_json(s));
       },
       py::arg("mask"), py::arg("truth"),
       "Dice, HD95, ASSD and Hausdorff distance (mm, both directions, spacing-aware), volume ratio and 6-connected "
@@ -306,7 +242,7 @@ void bind_segment(py::module_& m) {
           py::gil_scoped_release unlocked;
           s = segment::compare_mesh_to_mask(surface, truth);
         }
-        return scores_dict(s);
+        return to_python(io::to_json(s));
       },
       py::arg("surface"), py::arg("truth"), "compare() for a closed surface, rasterised onto the truth's grid.");
 }

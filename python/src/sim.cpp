@@ -55,17 +55,6 @@ std::vector<Tet> body_tets(const World& w, const geometry::TetMesh& mesh, std::i
   return tets;
 }
 
-py::dict energy_dict(const sim::EnergyReport& e) {
-  py::dict d;
-  d["kinetic_mj"] = e.kinetic_mj;
-  d["gravitational_mj"] = e.gravitational_mj;
-  d["elastic_mj"] = e.elastic_mj;
-  d["model_kinds"] = e.model_kinds;
-  d["elastic_total_mj"] = e.elastic_total_mj();
-  d["total_mj"] = e.total_mj();
-  return d;
-}
-
 }  // namespace
 
 void bind_sim(py::module_& m) {
@@ -224,7 +213,7 @@ void bind_sim(py::module_& m) {
           },
           "What the last step cost: CG iterations and residual (implicit schemes), force evaluations.")
       .def(
-          "energies", [](const World& w) { return energy_dict(sim::energies(w)); },
+          "energies", [](const World& w) { return to_python(io::to_json(sim::energies(w))); },
           "Kinetic, gravitational and per-model elastic energy (mJ) at the present state.")
       .def(
           "momentum",

@@ -130,22 +130,22 @@ def test_leak_control_stops_at_the_valve_and_a_stop_point_holds_the_front():
     flooded = ido.segment(p.ct, p.seeds, leak_control=False)
     assert flooded.report["volume_mm3"] > 5 * guarded.report["volume_mm3"]
     assert ido.compare(ido.surface_to_mask(guarded.surface, p.ct), p.labels)["dice"] >= 0.95
-    causes = [e["cause"] for e in guarded.report["leaks"]]
+    causes = [e["cause"] for e in guarded.report["leak_control"]["events"]]
     assert causes and set(causes) == {"chamber"}
-    assert guarded.report["seed_radius_mm"] > 0
+    assert guarded.report["leak_control"]["seed_radius_mm"] > 0
     # A stop point 12 mm up the vessel from the seed: the surface ends below it.
     seed = np.asarray(p.seeds[0])
     stop = seed + np.array([0.0, 0.0, 12.0])
     held = ido.segment(p.ct, p.seeds, stop_points=[stop])
     assert held.surface.vertices[:, 2].max() < stop[2]
-    assert "stop_point" in [e["cause"] for e in held.report["leaks"]]
+    assert "stop_point" in [e["cause"] for e in held.report["leak_control"]["events"]]
 
 
 def test_organ_choice_is_checked_and_sets_the_bone_band():
     p = ido.phantom("vertebra-stack", noise_hu=42.0, blur_voxels=0.7, seed=1)
     r = ido.segment(p.ct, p.seeds, organ="vertebra")
     assert r.report["accept_brighter"]
-    assert len(r.report["neighbour_markers_mm"]) == 2
+    assert len(r.report["leak_control"]["neighbour_markers_mm"]) == 2
     with pytest.raises(ValueError, match="organ 'liver'"):
         ido.segment(p.ct, p.seeds, organ="liver")
     with pytest.raises(ValueError, match="max_radius_mm"):

@@ -53,14 +53,4 @@ VolumeStatistics volume_statistics(const image::Volume<float>& volume) {
   return s;
 }
 
-std::array<Vec3, 2> point_bounds(const std::vector<Vec3>& points) {
-  if (points.empty()) return {Vec3::Zero(), Vec3::Zero()};
-  Vec3 lo = points.front(), hi = points.front();
-  for (const auto& p : points) {
-    lo = lo.cwiseMin(p);
-    hi = hi.cwiseMax(p);
-  }
-  return {lo, hi};
-}
-
 }  // namespace ido::io

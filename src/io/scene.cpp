@@ -20,6 +20,7 @@
 #include "ido/geometry/tet_quality.h"
 #include "ido/io/mesh_io.h"
 #include "ido/io/pvd.h"
+#include "ido/io/report_json.h"
 #include "ido/sim/diagnostics.h"
 #include "ido/sim/fem_corotational.h"
 #include "ido/sim/fem_linear.h"
@@ -755,15 +756,8 @@ SceneRunResult run_steps(Scene& scene, const std::filesystem::path& out_dir, Pro
   const std::vector<double> ms =
       result.step_ms.empty() ? std::vector<double>(4, 0.0) : percentiles(result.step_ms, {0.5, 0.9, 0.99, 1.0});
   report_json["ms_per_step"] = {{"p50", ms[0]}, {"p90", ms[1]}, {"p99", ms[2]}, {"max", ms[3]}};
-  const auto fe = sim::energies(world);
-  json per_model = json::array();
-  for (std::size_t m = 0; m < fe.elastic_mj.size(); ++m)
-    per_model.push_back({{"model", fe.model_kinds[m]}, {"elastic_mj", fe.elastic_mj[m]}});
-  report_json["final_energy_mj"] = {{"kinetic", fe.kinetic_mj},
-                                    {"elastic", fe.elastic_total_mj()},
-                                    {"gravitational", fe.gravitational_mj},
-                                    {"total", fe.total_mj()},
-                                    {"per_model", per_model}};
+  result.final_energy = sim::energies(world);
+  report_json["final_energy"] = to_json(result.final_energy);
   double cg_sum = 0.0;
   int cg_max = 0;
   for (int c : result.cg_iterations) {

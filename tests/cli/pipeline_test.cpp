@@ -110,9 +110,9 @@ TEST(PipelineCli, SpineAortaEndToEnd) {
   EXPECT_LE(d["bytes_per_node"].get<double>(), 4.0);
 
   // Deformation: finite energies; the clamped vessel has stored elastic energy.
-  const auto& e = report["deformation"]["final_energy_mj"];
-  EXPECT_TRUE(std::isfinite(e["total"].get<double>()));
-  EXPECT_GT(e["elastic"].get<double>(), 0.0);
+  const auto& e = report["deformation"]["final_energy"];
+  EXPECT_TRUE(std::isfinite(e["total_mj"].get<double>()));
+  EXPECT_GT(e["elastic_mj"].get<double>(), 0.0);
 }
 
 TEST(PipelineCli, BadInputExitsTwoAndWritesNoReport) {

@@ -37,7 +37,5 @@ struct VolumeStatistics {
 /// @throws ido::InvalidInput for an empty volume.
 [[nodiscard]] VolumeStatistics volume_statistics(const image::Volume<float>& volume);
 
-/// Axis-aligned bounds {min, max} of a point set (mm); zeros when empty.
-[[nodiscard]] std::array<Vec3, 2> point_bounds(const std::vector<Vec3>& points);
 
 }  // namespace ido::io

@@ -10,6 +10,7 @@
 #include "ido/core/atomic_file.h"
 #include "ido/core/progress.h"
 #include "ido/geometry/tet_mesh.h"
+#include "ido/sim/diagnostics.h"
 #include "ido/sim/fem_common.h"
 #include "ido/sim/world.h"
 
@@ -54,6 +55,7 @@ struct SceneRunResult {
   std::vector<double> kinetic_mj, elastic_mj, gravitational_mj, total_mj;
   std::vector<double> step_ms;            ///< wall time of each step
   std::vector<int> cg_iterations;         ///< per step (0 for explicit schemes)
+  sim::EnergyReport final_energy;         ///< at the last step, per model too
   std::int64_t frames = 0;
   double wall_time_s = 0.0;
 };
