@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "cli_util.h"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -139,20 +140,16 @@ segment::Organ parse_organ_option(const std::string& name, std::string_view opti
   }
 }
 
-void check_balloon_arguments(std::string_view prefix, const std::optional<double>& reference,
-                             const std::optional<double>& tolerance, double edge_reach_voxels,
-                             const std::optional<double>& outside_level) {
-  if (reference.has_value() != tolerance.has_value())
+segment::BalloonOptions balloon_options_from_flags(std::string_view prefix, const segment::BalloonChoices& choices) {
+  if (choices.reference.has_value() != choices.tolerance.has_value())
     throw InvalidInput(fmt::format("give {0}reference and {0}tolerance together (or neither, to estimate both at the seeds)",
                                    prefix));
-  if (reference && !std::isfinite(*reference)) throw InvalidInput(fmt::format("{}reference must be finite", prefix));
-  if (tolerance && !(*tolerance > 0 && std::isfinite(*tolerance)))
-    throw InvalidInput(fmt::format("{}tolerance must be positive", prefix));
-  if (!(edge_reach_voxels >= 0) || !std::isfinite(edge_reach_voxels))
-    throw InvalidInput(fmt::format("{}edge-reach must be 0 (no limit) or a positive number of voxels, got {}", prefix,
-                                   edge_reach_voxels));
-  if (outside_level && !std::isfinite(*outside_level))
-    throw InvalidInput(fmt::format("{}outside-level must be a finite intensity", prefix));
+  // The flag of each field: its name with hyphens, but --edge-reach for edge_reach_voxels.
+  return segment::balloon_options(choices, [prefix](std::string_view field) {
+    std::string flag(field == "edge_reach_voxels" ? std::string_view("edge_reach") : field);
+    std::replace(flag.begin(), flag.end(), '_', '-');
+    return std::string(prefix) + flag;
+  });
 }
 
 }  // namespace ido::cli

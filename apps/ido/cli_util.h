@@ -32,13 +32,11 @@ geometry::Aabb parse_roi(const std::string& text);
 /// @throws ido::InvalidInput naming the option and the choices.
 segment::Organ parse_organ_option(const std::string& name, std::string_view option);
 
-/// Checks the balloon's arguments as a command gives them, naming each option with @p prefix
-/// ("--" for `ido segment`, "--vessel-" for `ido pipeline`): reference and tolerance given
-/// together, a finite reference, a positive finite tolerance, an edge reach of 0 or more, a
-/// finite outside level. @throws ido::InvalidInput.
-void check_balloon_arguments(std::string_view prefix, const std::optional<double>& reference,
-                             const std::optional<double>& tolerance, double edge_reach_voxels,
-                             const std::optional<double>& outside_level);
+/// The balloon options a command's flags ask for (segment::balloon_options), its errors naming
+/// each flag with @p prefix ("--" for `ido segment`, "--vessel-" for `ido pipeline`); on the
+/// command line reference and tolerance are given together or not at all.
+/// @throws ido::InvalidInput.
+segment::BalloonOptions balloon_options_from_flags(std::string_view prefix, const segment::BalloonChoices& choices);
 
 /// A Progress that draws a bar on stderr when stderr is a terminal and quiet is off,
 /// and reports nothing otherwise.

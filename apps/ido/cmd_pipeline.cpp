@@ -296,12 +296,22 @@ std::string summary_markdown(const json& report) {
 
 void run(const Options& o, const GlobalOptions& g) {
   const auto start = std::chrono::steady_clock::now();
-  check_balloon_arguments("--vessel-", o.vessel_reference, o.vessel_tolerance, o.vessel_edge_reach,
-                          o.vessel_outside_level);
   const segment::Organ vessel_organ = parse_organ_option(o.vessel_organ, "--vessel-organ");
   if (vessel_organ == segment::Organ::Vertebra) throw InvalidInput("--vessel-organ: vertebra is for --bone-seed, not a vessel");
   std::optional<geometry::Aabb> roi;
   if (!o.roi.empty()) roi = parse_roi(o.roi);
+  // The vessel takes --vessel-organ and the --vessel- options; the bone is a vertebra (kept apart
+  // from its neighbours); the box bounds both.
+  segment::BalloonChoices vessel_choices, bone_choices;
+  vessel_choices.organ = vessel_organ;
+  vessel_choices.reference = o.vessel_reference;
+  vessel_choices.tolerance = o.vessel_tolerance;
+  vessel_choices.edge_reach_voxels = o.vessel_edge_reach;
+  vessel_choices.outside_level = o.vessel_outside_level;
+  vessel_choices.roi_mm = bone_choices.roi_mm = roi;
+  bone_choices.organ = segment::Organ::Vertebra;
+  const segment::BalloonOptions vessel_options = balloon_options_from_flags("--vessel-", vessel_choices);
+  const segment::BalloonOptions bone_options = balloon_options_from_flags("--", bone_choices);
   const fs::path dir = o.out_dir;
   std::error_code ec;
   fs::create_directories(dir, ec);
@@ -325,15 +335,7 @@ void run(const Options& o, const GlobalOptions& g) {
   std::vector<Organ> organs;
   auto add_organ = [&](const std::string& name, const std::vector<Vec3>& seeds, bool bone, int label) {
     ido::logger().info("segmenting the {} from {} seed(s)", name, seeds.size());
-    // The bone is a vertebra (kept apart from its neighbours); the vessel takes --vessel-organ.
-    segment::BalloonOptions bo = segment::organ_options(bone ? segment::Organ::Vertebra : vessel_organ);
-    bo.roi_mm = roi;
-    if (!bone) {
-      bo.reference = o.vessel_reference;
-      bo.tolerance = o.vessel_tolerance;
-      if (o.vessel_edge_reach > 0) bo.edge_reach_voxels = o.vessel_edge_reach;
-      if (o.vessel_outside_level) bo.outside_level = o.vessel_outside_level;
-    }
+    const segment::BalloonOptions& bo = bone ? bone_options : vessel_options;
     organs.push_back(segment_organ(name, ct, seeds, bo, dir, progress.get()));
     json entry;
     entry["options"] = {{"organ", bone ? "vertebra" : o.vessel_organ},

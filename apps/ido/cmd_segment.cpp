@@ -139,9 +139,18 @@ image::Volume<float> seed_slice(const image::Volume<float>& ct, const Vec3& seed
 
 void run(const SegmentCliOptions& o, const GlobalOptions& g) {
   if (o.seeds.empty() && o.seed_voxels.empty()) throw InvalidInput("give at least one --seed X,Y,Z or --seed-voxel I,J,K");
-  check_balloon_arguments("--", o.reference, o.tolerance, o.edge_reach_voxels, o.outside_level);
   const segment::Organ organ = parse_organ_option(o.organ, "--organ");
-  if (o.max_iterations < 1) throw InvalidInput(fmt::format("--max-iterations must be at least 1, got {}", o.max_iterations));
+  segment::BalloonChoices choices;
+  choices.organ = organ;
+  choices.reference = o.reference;
+  choices.tolerance = o.tolerance;
+  choices.bone = o.bone;
+  choices.white_noise = o.white_noise;
+  choices.edge_reach_voxels = o.edge_reach_voxels;
+  choices.outside_level = o.outside_level;
+  choices.max_iterations = o.max_iterations;
+  if (!o.roi.empty()) choices.roi_mm = parse_roi(o.roi);
+  const segment::BalloonOptions bo = balloon_options_from_flags("--", choices);
   if (o.calcium && !std::isfinite(*o.calcium)) throw InvalidInput("--calcium must be a finite intensity");
   if (!(o.calcium_reach_mm > 0) || !std::isfinite(o.calcium_reach_mm))
     throw InvalidInput(fmt::format("--calcium-reach must be a positive length in mm, got {}", o.calcium_reach_mm));
@@ -173,15 +182,6 @@ void run(const SegmentCliOptions& o, const GlobalOptions& g) {
       throw InvalidInput(fmt::format("--seed-voxel {}: outside the {}x{}x{} volume", s, ct.size(0), ct.size(1), ct.size(2)));
     seeds.push_back(ct.index_to_world(Vec3(double(idx[0]), double(idx[1]), double(idx[2]))));
   }
-  segment::BalloonOptions bo = segment::organ_options(organ);
-  bo.reference = o.reference;
-  bo.tolerance = o.tolerance;
-  bo.accept_brighter = bo.accept_brighter || o.bone;
-  if (o.white_noise) bo.estimate.residual_ball_factor = 5.0;
-  bo.max_iterations = o.max_iterations;
-  if (o.edge_reach_voxels > 0) bo.edge_reach_voxels = o.edge_reach_voxels;
-  if (o.outside_level) bo.outside_level = o.outside_level;
-  if (!o.roi.empty()) bo.roi_mm = parse_roi(o.roi);
   auto progress = make_progress(g.quiet);
   std::vector<KeptSurface> kept;
   std::int64_t inflation_steps = 0;

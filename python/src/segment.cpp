@@ -42,30 +42,26 @@ struct SegmentArgs {
   bool leak_control = true;
 };
 
+// Python's keywords are the library's field names (reference, edge_reach_voxels, ...), so
+// segment::balloon_options names them in its errors as they are.
 BalloonOptions balloon_options(const SegmentArgs& a) {
-  if (a.tolerance && !(*a.tolerance > 0 && std::isfinite(*a.tolerance)))
-    throw InvalidInput("tolerance must be positive and finite, got " + std::to_string(*a.tolerance));
-  if (a.reference && !std::isfinite(*a.reference)) throw InvalidInput("reference must be finite");
-  if (a.max_iterations < 1) throw InvalidInput("max_iterations must be at least 1");
-  BalloonOptions bo = segment::organ_options(segment::parse_organ(a.organ));
-  bo.reference = a.reference;
-  bo.tolerance = a.tolerance;
-  bo.accept_brighter = bo.accept_brighter || a.bone;
-  if (a.white_noise) bo.estimate.residual_ball_factor = 5.0;  // as `ido segment --white-noise`
-  if (a.edge_reach_voxels > 0) bo.edge_reach_voxels = a.edge_reach_voxels;
-  if (a.outside_level) bo.outside_level = a.outside_level;
-  bo.leak.enabled = a.leak_control;
-  bo.leak.stop_points_mm = a.stop_points;
-  if (a.max_radius_mm) bo.leak.max_radius_mm = *a.max_radius_mm;
-  bo.max_iterations = a.max_iterations;
+  std::optional<geometry::Aabb> roi;
   if (a.roi) {
     const auto& r = *a.roi;
-    const Vec3 lo(r[0], r[1], r[2]), hi(r[3], r[4], r[5]);
-    if (!lo.allFinite() || !hi.allFinite() || (lo.array() >= hi.array()).any())
-      throw InvalidInput("roi: expected (x0, y0, z0, x1, y1, z1) in mm with each minimum below its maximum");
-    bo.roi_mm = geometry::Aabb{lo, hi};
+    roi = geometry::Aabb{Vec3(r[0], r[1], r[2]), Vec3(r[3], r[4], r[5])};
   }
-  return bo;
+  return segment::balloon_options({.organ = segment::parse_organ(a.organ),
+                                   .reference = a.reference,
+                                   .tolerance = a.tolerance,
+                                   .bone = a.bone,
+                                   .white_noise = a.white_noise,
+                                   .edge_reach_voxels = a.edge_reach_voxels,
+                                   .outside_level = a.outside_level,
+                                   .max_iterations = a.max_iterations,
+                                   .roi_mm = roi,
+                                   .leak_control = a.leak_control,
+                                   .stop_points_mm = a.stop_points,
+                                   .max_radius_mm = a.max_radius_mm});
 }
 
 /// World seeds from @p seeds (mm) and @p seed_voxels (voxel indices of @p ct).

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "ido/segment/organ.h"
 
+#include <cmath>
+
 #include "ido/core/error.h"
 
 namespace ido::segment {
@@ -48,6 +50,34 @@ BalloonOptions organ_options(Organ organ, BalloonOptions o) {
     case Organ::Generic: break;
   }
   return o;
+}
+
+BalloonOptions balloon_options(const BalloonChoices& c, const std::function<std::string(std::string_view)>& option_name) {
+  const auto name = [&](std::string_view field) { return option_name ? option_name(field) : std::string(field); };
+  if (c.reference && !std::isfinite(*c.reference)) throw InvalidInput(name("reference") + " must be finite");
+  if (c.tolerance && !(*c.tolerance > 0 && std::isfinite(*c.tolerance)))
+    throw InvalidInput(name("tolerance") + " must be positive and finite");
+  if (!(c.edge_reach_voxels >= 0) || !std::isfinite(c.edge_reach_voxels))
+    throw InvalidInput(name("edge_reach_voxels") + " must be 0 (no limit) or a positive number of voxels");
+  if (c.outside_level && !std::isfinite(*c.outside_level)) throw InvalidInput(name("outside_level") + " must be finite");
+  if (c.max_iterations < 1) throw InvalidInput(name("max_iterations") + " must be at least 1");
+  if (c.max_radius_mm && !(*c.max_radius_mm > 0)) throw InvalidInput(name("max_radius_mm") + " must be positive");
+  if (c.roi_mm && (!c.roi_mm->min.allFinite() || !c.roi_mm->max.allFinite() ||
+                   (c.roi_mm->min.array() >= c.roi_mm->max.array()).any()))
+    throw InvalidInput(name("roi") + ": expected x0,y0,z0,x1,y1,z1 in mm with each minimum below its maximum");
+  BalloonOptions bo = organ_options(c.organ);
+  bo.reference = c.reference;
+  bo.tolerance = c.tolerance;
+  bo.accept_brighter = bo.accept_brighter || c.bone;
+  if (c.white_noise) bo.estimate.residual_ball_factor = 5.0;
+  if (c.edge_reach_voxels > 0) bo.edge_reach_voxels = c.edge_reach_voxels;
+  if (c.outside_level) bo.outside_level = c.outside_level;
+  bo.max_iterations = c.max_iterations;
+  bo.roi_mm = c.roi_mm;
+  bo.leak.enabled = c.leak_control;
+  bo.leak.stop_points_mm = c.stop_points_mm;
+  if (c.max_radius_mm) bo.leak.max_radius_mm = *c.max_radius_mm;
+  return bo;
 }
 
 }  // namespace ido::segment
