@@ -1,8 +1,12 @@
 // SPDX-License-Identifier: Apache-2.0
 // The Python module `ido`: numpy in and out, the C++ library underneath.
 // Errors map onto Python's: ido::InvalidInput → ValueError, ido::IoError → OSError (its
-// message names the file), ido::Cancelled → KeyboardInterrupt, any other ido::Error →
+// message names the file; FileNotFoundError when that file or its folder does not exist, as
+// Python's own open() raises), ido::Cancelled → KeyboardInterrupt, any other ido::Error →
 // RuntimeError.
+#include <filesystem>
+#include <system_error>
+
 #include <pybind11/pybind11.h>
 
 #include "bindings.h"
@@ -22,7 +26,9 @@ PYBIND11_MODULE(ido, m) {
     } catch (const ido::InvalidInput& e) {
       PyErr_SetString(PyExc_ValueError, e.what());
     } catch (const ido::IoError& e) {
-      PyErr_SetString(PyExc_OSError, e.what());
+      std::error_code ec;
+      const bool missing = !e.path().empty() && !std::filesystem::exists(e.path(), ec);
+      PyErr_SetString(missing ? PyExc_FileNotFoundError : PyExc_OSError, e.what());
     } catch (const ido::Cancelled& e) {
       PyErr_SetString(PyExc_KeyboardInterrupt, e.what());
     }

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include <fmt/format.h>
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>
 
@@ -84,6 +85,12 @@ std::vector<Vec3> seed_points(const image::Volume<float>& ct, const std::vector<
 void bind_segment(py::module_& m) {
   py::class_<BalloonResult>(m, "Segmentation", "What ido.segment / Balloon.run produced: a surface and a report.")
       .def_readonly("surface", &BalloonResult::surface, "The closed, manifold surface (ido.TriangleMesh, mm).")
+      .def("__repr__",
+           [](const BalloonResult& r) {
+             return fmt::format("<ido.Segmentation {} vertices, {} triangles, volume {:.1f} mm3, Euler {}, {}>",
+                                r.report.vertices, r.report.triangles, r.report.volume_mm3,
+                                r.report.euler_characteristic, r.report.stop_reason);
+           })
       .def_property_readonly(
           "report", [](const BalloonResult& r) { return to_python(io::to_json(r.report)); },
           "Reference and tolerance used, iterations, seconds (and per phase), volume, area, V/E/F, Euler "
@@ -133,6 +140,11 @@ void bind_segment(py::module_& m) {
                                "The balloon driven step by step: step() inflates once, surface shows the current "
                                "mesh, run() finishes (edge stage and final repair). Same arguments as ido.segment "
                                "without calcium.")
+      .def("__repr__",
+           [](const segment::Balloon& b) {
+             return fmt::format("<ido.Balloon {} vertices, reference {:g}, tolerance {:g}>", b.particles().size(),
+                                b.model().reference, b.model().tolerance);
+           })
       .def(py::init([](const image::Volume<float>& ct, const std::vector<Vec3>& seeds,
                        const std::vector<std::array<std::int64_t, 3>>& seed_voxels, std::optional<double> reference,
                        std::optional<double> tolerance, std::optional<std::array<double, 6>> roi, bool bone,
@@ -174,6 +186,12 @@ void bind_segment(py::module_& m) {
           "tolerance", [](const segment::Balloon& b) { return b.model().tolerance; }, "The tolerance in use.");
 
   py::class_<segment::Phantom>(m, "Phantom", "A synthetic CT (HU) with its ground truth, seeds and known topology.")
+      .def("__repr__",
+           [](const segment::Phantom& p) {
+             const auto n = p.ct_hu.size();
+             return fmt::format("<ido.Phantom {} {}x{}x{}, {} seed(s)>", segment::phantom_kind_name(p.kind), n[0], n[1],
+                                n[2], p.seeds_mm.size());
+           })
       .def_property_readonly(
           "kind", [](const segment::Phantom& p) { return std::string(segment::phantom_kind_name(p.kind)); })
       .def_readonly("ct", &segment::Phantom::ct_hu, "The CT-like volume (ido.Volume, HU).")

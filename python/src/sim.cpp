@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include <fmt/format.h>
 #include <pybind11/eigen.h>
 #include <pybind11/functional.h>
 #include <pybind11/numpy.h>
@@ -65,6 +66,11 @@ void bind_sim(py::module_& m) {
                     "integrator chosen by name that can change between any two steps. Units: mm, kg, s, N; "
                     "energies in mJ. One call of step() is one step: the loop is the caller's.")
       .def(py::init<>())
+      .def("__repr__",
+           [](const World& w) {
+             return fmt::format("<ido.World {} particles, {} force models, integrator {}, step {}>", w.particles().size(),
+                                w.models().size(), w.integrator(), w.step_count());
+           })
       .def(
           "add_tet_body",
           [](World& w, const geometry::TetMesh& mesh, double density_kg_m3) {
@@ -257,6 +263,11 @@ void bind_sim(py::module_& m) {
 
   py::class_<io::Scene>(m, "Scene", "A scene file loaded: its world, time step, step count and bodies.")
       .def_readonly("world", &io::Scene::world, "The world, ready to step (a reference into the scene).")
+      .def("__repr__",
+           [](const io::Scene& sc) {
+             return fmt::format("<ido.Scene {}: {} bodies, {} steps of {:g} s>", sc.source, sc.bodies.size(), sc.steps,
+                                sc.dt_s);
+           })
       .def_readonly("dt_s", &io::Scene::dt_s)
       .def_readonly("steps", &io::Scene::steps)
       .def_property_readonly("bodies", [](const io::Scene& s) {

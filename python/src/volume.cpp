@@ -88,6 +88,9 @@ void bind_volume_type(py::module_& m, const char* name, const char* doc) {
                std::to_string(v.size(2)) + " spacing (" + std::to_string(v.spacing()[0]) + ", " +
                std::to_string(v.spacing()[1]) + ", " + std::to_string(v.spacing()[2]) + ") mm>";
       });
+  // A numpy array is taken wherever this type is (unit spacing, origin 0, identity direction),
+  // through the constructor above.
+  py::implicitly_convertible<py::array, V>();
 }
 
 }  // namespace

@@ -150,3 +150,25 @@ def test_organ_choice_is_checked_and_sets_the_bone_band():
         ido.segment(p.ct, p.seeds, organ="liver")
     with pytest.raises(ValueError, match="max_radius_mm"):
         ido.segment(p.ct, p.seeds, max_radius_mm=-1.0)
+
+
+def test_reprs_say_what_objects_hold():
+    p = ido.phantom("sphere")
+    n = p.ct.array.shape
+    assert repr(p) == f"<ido.Phantom sphere {n[0]}x{n[1]}x{n[2]}, 1 seed(s)>"
+    b = ido.Balloon(p.ct, p.seeds)
+    assert repr(b).startswith(f"<ido.Balloon {len(b.surface.vertices)} vertices, reference ")
+    r = ido.segment(p.ct, p.seeds)
+    rep = r.report
+    assert repr(r) == (f"<ido.Segmentation {rep['vertices']} vertices, {rep['triangles']} triangles, "
+                       f"volume {rep['volume_mm3']:.1f} mm3, Euler {rep['euler_characteristic']}, {rep['stop_reason']}>")
+
+
+def test_a_numpy_array_is_taken_where_a_volume_is():
+    p = ido.phantom("sphere")
+    n = p.ct.array.shape
+    centre = [(n[2] // 2, n[1] // 2, n[0] // 2)]
+    from_array = ido.segment(p.ct.array, seed_voxels=centre)
+    explicit = ido.segment(ido.Volume(p.ct.array), seed_voxels=centre)  # unit spacing, origin 0
+    assert from_array.report["volume_mm3"] > 0
+    assert np.array_equal(from_array.surface.vertices, explicit.surface.vertices)

@@ -147,5 +147,10 @@ def test_bad_input_raises_value_error():
         w.integrator = "leapfrog2"
     with pytest.raises(ValueError, match="do not fit"):
         ido.World().add_fem(beam)
-    with pytest.raises(OSError, match="nowhere.json"):
+    with pytest.raises(FileNotFoundError, match="nowhere.json"):
         ido.load_scene("/nonexistent/nowhere.json")
+
+
+def test_reprs_say_what_objects_hold():
+    w = ido.World()
+    assert repr(w) == "<ido.World 0 particles, 0 force models, integrator symplectic_euler, step 0>"

@@ -92,7 +92,7 @@ def test_mask_round_trip_is_uint8(tmp_path):
 
 def test_bad_input_raises_with_what_is_wrong(tmp_path):
     missing = tmp_path / "missing.nii.gz"
-    with pytest.raises(OSError, match="missing.nii.gz"):
+    with pytest.raises(FileNotFoundError, match="missing.nii.gz"):  # an OSError, as open() raises
         ido.read_volume(missing)
     with pytest.raises(ValueError, match="3-D"):
         ido.Volume(np.zeros((3, 3), np.float32))
@@ -100,9 +100,10 @@ def test_bad_input_raises_with_what_is_wrong(tmp_path):
         ido.Volume(np.zeros((2, 2, 2), np.float32), spacing=(0.0, 1.0, 1.0))
     bad = tmp_path / "garbage.nii.gz"
     bad.write_bytes(b"not a nifti file")
-    with pytest.raises(OSError, match="garbage.nii.gz"):
+    with pytest.raises(OSError, match="garbage.nii.gz") as unreadable:
         ido.read_volume(bad)
-    with pytest.raises(OSError):
+    assert not isinstance(unreadable.value, FileNotFoundError)  # it exists: not "not found"
+    with pytest.raises(FileNotFoundError):
         ido.write_volume(tmp_path / "no-such-dir" / "v.nii.gz", make_volume())
     assert not (tmp_path / "no-such-dir").exists()
 
