@@ -10,24 +10,14 @@
 #include "ido/core/error.h"
 #include "ido/meshing/marching_cubes.h"
 #include "ido/meshing/signed_distance.h"
+#include "support/random_mask.h"
 #include "support/test_support.h"
 
 namespace ido::meshing {
 using image::Volume;
+using test::random_mask;
 using test::rel_near;
 using test::rotation;
-
-namespace {
-
-Volume<std::uint8_t> random_mask(std::mt19937& rng, int max_dim, double fill) {
-  std::uniform_int_distribution<int> dim(1, max_dim);
-  std::bernoulli_distribution b(fill);
-  Volume<std::uint8_t> m({dim(rng), dim(rng), dim(rng)}, Vec3(1.0, 0.8, 1.3));
-  for (auto& x : m.data()) x = b(rng);
-  return m;
-}
-
-}  // namespace
 
 TEST(Voxelize, MaskSurfaceRasterisesBackToTheMask) {
   // The marching-cubes surface of a mask separates every inside voxel centre from every

@@ -8,12 +8,15 @@
 
 #include "ido/geometry/mesh_checks.h"
 #include "ido/meshing/marching_cubes.h"
+#include "support/random_mask.h"
 #include "support/test_support.h"
 
 namespace ido::segment {
 using image::Volume;
 using test::near;
+using test::random_mask;
 using test::rel_near;
+using test::rotation;
 
 namespace {
 
@@ -26,20 +29,6 @@ Volume<std::uint8_t> ball(const Index3& n, const Vec3& spacing, const Vec3& cent
       for (std::int64_t i = 0; i < n[0]; ++i)
         m(i, j, k) = (m.index_to_world(Vec3(double(i), double(j), double(k))) - centre).norm() < r;
   return m;
-}
-
-Volume<std::uint8_t> random_mask(std::mt19937& rng, int max_dim, double fill) {
-  std::uniform_int_distribution<int> dim(1, max_dim);
-  std::bernoulli_distribution b(fill);
-  Volume<std::uint8_t> m({dim(rng), dim(rng), dim(rng)}, Vec3(1.0, 0.8, 1.3));
-  for (auto& x : m.data()) x = b(rng);
-  return m;
-}
-
-Mat3 rotation(double ax, double ay, double az) {
-  return (Eigen::AngleAxisd(az, Vec3::UnitZ()) * Eigen::AngleAxisd(ay, Vec3::UnitY()) *
-          Eigen::AngleAxisd(ax, Vec3::UnitX()))
-      .toRotationMatrix();
 }
 
 }  // namespace
