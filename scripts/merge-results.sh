@@ -5,7 +5,7 @@
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 out="$root/bench/RESULTS.md"
-modules=(segment segment-seeds meshing geometry sim drill fuzz)
+modules=(segment segment-seeds meshing geometry sim drill view fuzz)
 {
   echo "# Measured figures"
   echo

@@ -19,6 +19,7 @@
 #include "command.h"
 #include "ido/core/error.h"
 #include "ido/io/mesh_io.h"
+#include "ido/io/report_json.h"
 #include "ido/io/volume_io.h"
 #include "ido/segment/balloon.h"
 #include "ido/segment/calcification.h"
@@ -228,7 +229,7 @@ void run(const SegmentCliOptions& o, const GlobalOptions& g) {
   if (!o.mask.empty()) io::write_volume(o.mask, segment::surface_to_mask(r.surface, ct));
   const segment::BalloonReport& rep = r.report;
   if (!o.report.empty()) {
-    nlohmann::json j = view::segment_report_json({o.input, seeds, organ, bo}, r, {o.output, o.mask, o.report});
+    io::Json j = view::segment_report_json({o.input, seeds, organ, bo}, r, {o.output, o.mask, o.report});
     if (calcified)
       j["calcification"] = {{"threshold", *o.calcium},
                             {"reach_mm", o.calcium_reach_mm},

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // `ido view [FILE...] [--script EVENTS.json --screenshots DIR] [--record EVENTS.json] [--frames N]
-//  [--size WxH] [--organ NAME] [--seed-voxel I,J,K] [--surface S.stl] [--mask M.nii.gz] [--report R.json]
-//  [--tet-output M.vtu] [--tet-edge MM] [--burr-radius MM] [--drill-max S] [--drill-path P.csv] [--drill-report R.json]
-//  [--deform-log LOG.json]`:
+//  [--size WxH] [--organ NAME] [--seed-voxel I,J,K] [--stop-voxel I,J,K] [--surface S.stl] [--mask M.nii.gz]
+//  [--report R.json] [--tet-output M.vtu] [--tet-edge MM] [--burr-radius MM] [--shaft-radius MM] [--drill-max S]
+//  [--drill-path P.csv] [--drill-report R.json] [--drill-replay P.csv] [--drill-udp PORT] [--deform-log LOG.json]`:
 //  the interactive workbench. Presentation only: the workbench is ido::view::run_workbench.
 #include <memory>
 #include <string>
@@ -25,13 +25,15 @@ struct ViewCliOptions {
   std::int64_t frames = 0;
   std::string size = "1280x800";
   std::string organ = "generic";
-  std::vector<std::string> seed_voxels;
+  std::vector<std::string> seed_voxels, stop_voxels;
   std::string surface, mask, report;
   std::string tet_output;
   double tet_edge_mm = 0.0;
   double burr_radius_mm = 2.0;
+  double shaft_radius_mm = 0.0;
   double drill_max_s = 60.0;
-  std::string drill_path, drill_report;
+  std::string drill_path, drill_report, drill_replay;
+  int drill_udp_port = 0;
   std::string deform_log;
 };
 
@@ -48,6 +50,7 @@ void run(const ViewCliOptions& o, const GlobalOptions& g) {
   w.height_px = height;
   w.organ = parse_organ_option(o.organ, "--organ");
   for (const auto& s : o.seed_voxels) w.seed_voxels.push_back(parse_index3(s, "--seed-voxel"));
+  for (const auto& s : o.stop_voxels) w.stop_voxels.push_back(parse_index3(s, "--stop-voxel"));
   w.segment_outputs = {o.surface, o.mask, o.report};
   for (const auto& [path, option] : {std::pair{o.surface, "--surface"}, {o.mask, "--mask"}, {o.report, "--report"}})
     if (!path.empty()) check_output_file(path, option);
@@ -56,15 +59,18 @@ void run(const ViewCliOptions& o, const GlobalOptions& g) {
   if (!o.tet_output.empty()) check_output_file(o.tet_output, "--tet-output");
   w.tet_edge_mm = o.tet_edge_mm;
   w.burr_radius_mm = o.burr_radius_mm;
+  w.shaft_radius_mm = o.shaft_radius_mm;
   w.drill_max_s = o.drill_max_s;
   w.drill_path = o.drill_path;
   w.drill_report = o.drill_report;
+  w.drill_replay = o.drill_replay;
+  w.drill_udp_port = o.drill_udp_port;
   if (!o.drill_path.empty()) check_output_file(o.drill_path, "--drill-path");
   if (!o.drill_report.empty()) check_output_file(o.drill_report, "--drill-report");
   w.deform_log = o.deform_log;
   if (!o.deform_log.empty()) check_output_file(o.deform_log, "--deform-log");
   w.quiet = g.quiet;
-  view::run_workbench(w);
+  (void)view::run_workbench(w);
 }
 
 void setup(CLI::App& app, const GlobalOptions& g) {
@@ -81,6 +87,8 @@ void setup(CLI::App& app, const GlobalOptions& g) {
   sub->add_option("--size", opts->size, "window size WIDTHxHEIGHT in pixels; default 1280x800 (a script's own size wins)");
   sub->add_option("--organ", opts->organ, "first organ choice of the Segment workspace: generic, artery, vein, vertebra");
   sub->add_option("--seed-voxel", opts->seed_voxels, "seed voxel I,J,K placed at start; repeatable");
+  sub->add_option("--stop-voxel", opts->stop_voxels,
+                  "stop point voxel I,J,K placed at start (the balloon's front does not pass it); repeatable");
   sub->add_option("--surface", opts->surface, "where Save (ctrl+s) writes the segmented surface (.stl .ply .obj .vtp)");
   sub->add_option("--mask", opts->mask, "where Save writes the mask (a volume file)");
   sub->add_option("--report", opts->report, "where Save writes the report (JSON, as ido segment --report)");
@@ -89,11 +97,17 @@ void setup(CLI::App& app, const GlobalOptions& g) {
   sub->add_option("--tet-edge", opts->tet_edge_mm,
                   "the Mesh workspace's lattice spacing (mm); 0 (default) = the surface's mean edge, as ido tetmesh");
   sub->add_option("--burr-radius", opts->burr_radius_mm, "the Drill workspace's spherical burr radius (mm); default 2");
+  sub->add_option("--shaft-radius", opts->shaft_radius_mm,
+                  "the burr's shaft radius (mm; 0, the default: none), as ido drill --tool sphere:radius=R,shaft=S");
   sub->add_option("--drill-max", opts->drill_max_s, "longest drilling session (s); default 60");
   sub->add_option("--drill-path", opts->drill_path,
                   "write each drilling session's path here when it ends (CSV t,x,y,z that ido drill --path replays)");
   sub->add_option("--drill-report", opts->drill_report,
                   "write each drilling session's figures here when it ends (JSON: removed volume, timing percentiles)");
+  sub->add_option("--drill-replay", opts->drill_replay,
+                  "a path CSV (t,x,y,z as ido drill --path reads) the Drill workspace replays with p");
+  sub->add_option("--drill-udp", opts->drill_udp_port,
+                  "UDP port on 127.0.0.1 where the Drill workspace's device bridge listens (u); 0 (default) = any free port");
   sub->add_option("--deform-log", opts->deform_log,
                   "write the pulled particle's positions, time and momentum per shown step to this JSON on exit");
   sub->callback([opts, &g] { run(*opts, g); });

@@ -5,6 +5,11 @@
 #include <chrono>
 #include <cmath>
 #include <deque>
+#include <fstream>
+#include <sstream>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include "ido/core/error.h"
 #include "ido/sim/diagnostics.h"
@@ -17,6 +22,49 @@ double equivalent_strain(const Mat3& e) {
   return std::sqrt(2.0 / 3.0 * dev.cwiseProduct(dev).sum());
 }
 
+/// The numbers of a scene file that can be changed between steps (SceneParameter).
+std::vector<SceneParameter> scene_parameters(const nlohmann::json& doc) {
+  std::vector<SceneParameter> out;
+  const auto& bodies = doc.at("bodies");
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    const auto& b = bodies[i];
+    const std::string name = b.contains("name") && b["name"].is_string() && !b["name"].get<std::string>().empty()
+                                 ? b["name"].get<std::string>()
+                                 : fmt::format("body {}", i);
+    const std::string base = fmt::format("/bodies/{}", i);
+    if (b.contains("material") && b["material"].is_object()) {
+      const auto& m = b["material"];
+      for (const auto& [key, label] : {std::pair{"youngs_modulus_pa", "Young's modulus (Pa)"},
+                                       {"poisson_ratio", "Poisson ratio"},
+                                       {"density_kg_m3", "density (kg/m3)"}})
+        if (m.contains(key) && m[key].is_number())
+          out.push_back({base + "/material/" + key, name + ": " + label, m[key].get<double>()});
+    }
+    for (const char* model : {"mass_spring", "shape_matching", "mls"})
+      if (b.contains(model) && b[model].is_object())
+        for (const auto& [key, value] : b[model].items())
+          if (value.is_number())
+            out.push_back({base + "/" + model + "/" + key, name + ": " + model + " " + key, value.get<double>()});
+  }
+  for (const auto& [key, label] : {std::pair{"rayleigh_mass_per_s", "damping alpha (1/s)"},
+                                   {"rayleigh_stiffness_s", "damping beta (s)"}}) {
+    double v = 0.0;
+    if (doc.contains("damping") && doc["damping"].is_object() && doc["damping"].contains(key) &&
+        doc["damping"][key].is_number())
+      v = doc["damping"][key].get<double>();
+    out.push_back({std::string("/damping/") + key, label, v});
+  }
+  return out;
+}
+
+std::string read_text(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  if (!in) throw IoError(path.string(), "cannot read the scene file");
+  return text.str();
+}
+
 }  // namespace
 
 DeformSession::DeformSession(io::Scene scene) : m_scene(std::move(scene)) {
@@ -25,6 +73,57 @@ DeformSession::DeformSession(io::Scene scene) : m_scene(std::move(scene)) {
   m_integrator_names = m_scene.world.integrators().names();
   m_dt_s = m_scene.dt_s;
   m_thread = std::thread([this] { work(); });
+}
+
+DeformSession::DeformSession(const std::filesystem::path& scene_file) : m_scene(io::load_scene(scene_file)) {
+  if (m_scene.bodies.empty()) throw InvalidInput("the scene has no bodies to deform");
+  m_scene_text = read_text(scene_file);
+  m_base_dir = scene_file.parent_path();
+  m_parameters = scene_parameters(nlohmann::json::parse(m_scene_text));  // load_scene read it: valid JSON
+  m_bodies = m_scene.bodies;
+  m_integrator_names = m_scene.world.integrators().names();
+  m_dt_s = m_scene.dt_s;
+  m_thread = std::thread([this] { work(); });
+}
+
+void DeformSession::set_parameters(const std::vector<double>& values) {
+  if (values.size() != m_parameters.size())
+    throw InvalidInput(fmt::format("{} parameter values given for the scene's {}", values.size(), m_parameters.size()));
+  m_parameter_requests.write(std::make_shared<const std::vector<double>>(values));
+}
+
+bool DeformSession::apply_parameters(const std::vector<double>& values, std::vector<double>& in_use,
+                                     std::vector<ParameterChange>& changes, std::string& error) {
+  error.clear();
+  if (values == in_use) return false;
+  // The scene file with the new values, read again by the library (which checks them).
+  nlohmann::json doc = nlohmann::json::parse(m_scene_text);
+  for (std::size_t i = 0; i < values.size(); ++i)
+    if (values[i] != m_parameters[i].value) doc[nlohmann::json::json_pointer(m_parameters[i].pointer)] = values[i];
+  io::Scene fresh;
+  try {
+    fresh = io::parse_scene(doc.dump(), m_scene.source, m_base_dir);
+  } catch (const std::exception& e) {
+    error = e.what();
+    return false;
+  }
+  sim::World& old = m_scene.world;
+  if (fresh.world.particles().size() != old.particles().size()) {
+    error = "the changed scene has other particles";
+    return false;
+  }
+  // The new world goes on from the old one's state.
+  fresh.world.particles().positions() = old.particles().positions();
+  fresh.world.particles().velocities() = old.particles().velocities();
+  fresh.world.set_integrator(old.integrator());
+  const std::int64_t step = m_step_base + old.step_count();
+  for (std::size_t i = 0; i < values.size(); ++i)
+    if (values[i] != in_use[i]) changes.push_back({step, m_parameters[i].pointer, values[i]});
+  m_step_base = step;
+  m_time_base_s += old.time_s();
+  m_scene = std::move(fresh);
+  in_use = values;
+  return true;
 }
 
 DeformSession::~DeformSession() {
@@ -58,17 +157,21 @@ std::shared_ptr<const DeformState> DeformSession::latest() {
 }
 
 void DeformSession::work() {
-  sim::World& world = m_scene.world;
-  const std::vector<sim::PointLoad> base_loads = world.external().point_loads;
+  sim::World& world = m_scene.world;  // the same object when a parameter change replaces the world's content
+  std::vector<sim::PointLoad> base_loads = world.external().point_loads;
   std::deque<EnergySample> history;
   std::string error;
   std::int32_t grabbed = -1;
   std::vector<std::int32_t> group;
   double grab_k = 0.0;
+  std::vector<double> in_use;
+  for (const SceneParameter& p : m_parameters) in_use.push_back(p.value);
+  std::vector<ParameterChange> changes;
+  std::string parameter_error;
   auto publish = [&] {
     auto s = std::make_shared<DeformState>();
-    s->steps = world.step_count();
-    s->time_s = world.time_s();
+    s->steps = m_step_base + world.step_count();
+    s->time_s = m_time_base_s + world.time_s();
     s->integrator = world.integrator();
     s->positions_mm = world.particles().positions();
     s->linear_momentum = sim::momentum(world.particles()).linear_kg_mm_s;
@@ -85,11 +188,14 @@ void DeformSession::work() {
     s->history.assign(history.begin(), history.end());
     s->error = error;
     s->grab_stiffness_n_per_mm = grab_k;
+    s->parameters = in_use;
+    s->changes = changes;
+    s->parameter_error = parameter_error;
     m_states.write(std::shared_ptr<const DeformState>(std::move(s)));
   };
   auto sample = [&](double step_ms) {
     const sim::EnergyReport e = sim::energies(world);
-    history.push_back({world.time_s(), e.kinetic_mj, e.elastic_total_mj(), e.total_mj(), step_ms});
+    history.push_back({m_time_base_s + world.time_s(), e.kinetic_mj, e.elastic_total_mj(), e.total_mj(), step_ms});
     if (history.size() > DeformState::kHistory) history.pop_front();
   };
   sample(0.0);
@@ -97,6 +203,16 @@ void DeformSession::work() {
   bool unpublished = false;  // steps taken since the last state handed over
   while (!m_stop) {
     const bool requested = m_step_requests.load() > 0;
+    // Parameter changes: between two steps, and at once while paused. Read after the step
+    // requests, so values set before a step was asked for are in use for that step.
+    if (m_parameter_requests.has_new()) {
+      const std::shared_ptr<const std::vector<double>> wanted = m_parameter_requests.read();
+      if (wanted && !m_scene_text.empty()) {
+        if (apply_parameters(*wanted, in_use, changes, parameter_error)) base_loads = world.external().point_loads;
+        publish();
+        unpublished = false;
+      }
+    }
     if (!error.empty() || (!m_running && !requested)) {
       if (unpublished) publish();  // the state the run stopped at
       unpublished = false;

@@ -25,23 +25,34 @@ double enclosed_volume(const geometry::TriangleMesh& m) {
 
 // ---- the device ------------------------------------------------------------------------------
 
-WindowDevice::WindowDevice(std::size_t capacity, double max_duration_s)
-    : m_times(capacity), m_positions(capacity), m_max_duration_s(max_duration_s) {
+WindowDevice::WindowDevice(std::size_t capacity, double max_duration_s, std::unique_ptr<drill::HapticDevice> source)
+    : m_source(std::move(source)), m_times(capacity), m_poses(capacity), m_max_duration_s(max_duration_s) {
   if (capacity == 0) throw InvalidInput("the window device needs room for at least one tick");
 }
 
 void WindowDevice::set_position(const Vec3& position_mm) noexcept {
-  m_pose.write(position_mm);
+  drill::ToolPose pose;
+  pose.position_mm = position_mm;
+  set_pose(pose);
+}
+
+void WindowDevice::set_pose(const drill::ToolPose& pose) noexcept {
+  m_pose.write(pose);
   m_has_pose.store(true, std::memory_order_release);
 }
 
+bool WindowDevice::has_pose() const noexcept {
+  return m_source ? m_source->has_pose() : m_has_pose.load(std::memory_order_acquire);
+}
+
 drill::ToolPose WindowDevice::read_pose(double t_s) noexcept {
-  drill::ToolPose pose;
-  pose.position_mm = m_pose.read();
+  const drill::ToolPose pose = m_source ? m_source->read_pose(t_s) : m_pose.read();
+  if (!has_pose()) return pose;  // nothing to record or show yet (no packet from the device)
+  m_shown.write(pose);
   const std::size_t n = m_count.load(std::memory_order_relaxed);
   if (n < m_times.size() && (n == 0 || t_s > m_times[n - 1])) {
     m_times[n] = t_s;
-    m_positions[n] = pose.position_mm;
+    m_poses[n] = pose;
     m_count.store(n + 1, std::memory_order_release);
   }
   return pose;
@@ -52,20 +63,22 @@ void WindowDevice::write_force(const Vec3& force_n, double t_s) noexcept {
   s.t_s = t_s;
   s.force_n = force_n;
   m_force.write(s);
+  if (m_source) m_source->write_force(force_n, t_s);
 }
 
 bool WindowDevice::finished(double t_s) const noexcept {
   return m_finished.load(std::memory_order_acquire) || t_s > m_max_duration_s ||
-         m_count.load(std::memory_order_relaxed) >= m_times.size();
+         m_count.load(std::memory_order_relaxed) >= m_times.size() || (m_source && m_source->finished(t_s));
 }
 
 // ---- the session -----------------------------------------------------------------------------
 
-drill::SimulatorOptions drill_cli_options(double burr_radius_mm) {
+drill::SimulatorOptions drill_cli_options(double burr_radius_mm, double shaft_radius_mm) {
   // As apps/ido/cmd_drill.cpp with its defaults (--force-threshold 0.2, --removal-rate 0,
   // --stiffness 1.5, neither --max-depth nor --min-size).
   drill::SimulatorOptions so;
   so.tool.burr_radius_mm = burr_radius_mm;
+  so.tool.shaft_radius_mm = shaft_radius_mm;
   so.erosion.force_threshold_n = 0.2;
   so.erosion.removal_rate_mm3_per_s = 0.0;
   so.erosion.min_size_mm = burr_radius_mm / 4.0;
@@ -74,11 +87,20 @@ drill::SimulatorOptions drill_cli_options(double burr_radius_mm) {
   return so;
 }
 
-DrillSession::DrillSession(const geometry::TetMesh& mesh, const drill::SimulatorOptions& options, double max_duration_s)
+std::unique_ptr<drill::ScriptedTrajectory> load_path_device(const std::filesystem::path& csv,
+                                                            const drill::SimulatorOptions& options) {
+  // As `ido drill`: the recording holds the path's ticks and the drain, not a fixed 2^20.
+  const auto peek = drill::ScriptedTrajectory::load_csv(csv, 1);
+  const auto ticks = static_cast<std::size_t>((peek.duration() + options.drain_limit_s + 1.0) / options.haptic_period_s) + 1024;
+  return std::make_unique<drill::ScriptedTrajectory>(peek.times(), peek.poses(), std::min(ticks, options.max_haptic_ticks));
+}
+
+DrillSession::DrillSession(const geometry::TetMesh& mesh, const drill::SimulatorOptions& options, double max_duration_s,
+                           std::unique_ptr<drill::HapticDevice> source)
     : m_options(options),
       m_max_duration_s(max_duration_s),
       m_hierarchy(std::make_unique<drill::TetHierarchy>(mesh)),
-      m_device(static_cast<std::size_t>(max_duration_s / options.haptic_period_s) + 1024, max_duration_s) {
+      m_device(static_cast<std::size_t>(max_duration_s / options.haptic_period_s) + 1024, max_duration_s, std::move(source)) {
   if (!(max_duration_s > 0) || max_duration_s > drill::kMaxScriptDuration_s)
     throw InvalidInput(fmt::format("a drilling session lasts 0..{} s, not {}", drill::kMaxScriptDuration_s, max_duration_s));
   m_root_vertices = m_hierarchy->vertices();
@@ -109,9 +131,9 @@ void DrillSession::take_snapshot(double t_s, const std::vector<std::vector<drill
   m_surfaces.write(std::shared_ptr<const DrillSnapshot>(std::move(snap)));
 }
 
-void DrillSession::start(const Vec3& start_mm) {
+void DrillSession::start(const drill::ToolPose& start) {
   if (started()) return;
-  m_device.set_position(start_mm);
+  m_device.set_pose(start);
   m_start = std::chrono::steady_clock::now();
   m_thread = std::thread([this] {
     try {
@@ -158,13 +180,22 @@ DrillFigures DrillSession::figures() {
 void DrillSession::write_path_csv(const std::filesystem::path& path) const {
   if (!m_ended.load(std::memory_order_acquire)) throw Error("the drilling session has not ended");
   const std::size_t n = m_device.recorded();
+  bool turned = false;  // orientation columns only when the tool was turned
+  for (std::size_t i = 0; i < n && !turned; ++i)
+    turned = m_device.pose(i).orientation.coeffs() != Eigen::Quaterniond::Identity().coeffs();
   write_file_atomically(
       path,
       [&](std::ostream& out) {
-        out << "t,x,y,z\n";
+        out << (turned ? "t,x,y,z,qx,qy,qz,qw\n" : "t,x,y,z\n");
         for (std::size_t i = 0; i < n; ++i) {
-          const Vec3& p = m_device.position_mm(i);
-          out << fmt::format("{:.9g},{:.17g},{:.17g},{:.17g}\n", m_device.time_s(i), p.x(), p.y(), p.z());
+          const drill::ToolPose& p = m_device.pose(i);
+          out << fmt::format("{:.9g},{:.17g},{:.17g},{:.17g}", m_device.time_s(i), p.position_mm.x(), p.position_mm.y(),
+                             p.position_mm.z());
+          if (turned) {
+            const Eigen::Quaterniond& q = p.orientation;
+            out << fmt::format(",{:.17g},{:.17g},{:.17g},{:.17g}", q.x(), q.y(), q.z(), q.w());
+          }
+          out << '\n';
         }
       },
       false);

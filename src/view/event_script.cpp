@@ -34,6 +34,11 @@ bool is_mouse(EventKind k) {
   return k == EventKind::MouseMove || k == EventKind::MouseDown || k == EventKind::MouseUp || k == EventKind::Scroll;
 }
 
+/// Key and button events carry the modifiers held (a shift-click places a stop point).
+bool has_modifiers(EventKind k) {
+  return k == EventKind::KeyDown || k == EventKind::KeyUp || k == EventKind::MouseDown || k == EventKind::MouseUp;
+}
+
 }  // namespace
 
 const char* event_kind_name(EventKind kind) noexcept {
@@ -109,6 +114,8 @@ EventScript EventScript::parse(const std::string& json_text, const std::string& 
     if (ev.kind == EventKind::KeyDown || ev.kind == EventKind::KeyUp) {
       ev.key = text("key");
       if (ev.key.empty()) throw bad(where + "/key", "expected a key name");
+    }
+    if (has_modifiers(ev.kind)) {
       auto flag = [&](const char* name) {
         if (!e.contains(name)) return false;
         if (!e[name].is_boolean()) throw bad(where + "/" + name, "expected true or false");
@@ -165,8 +172,8 @@ std::string EventScript::to_json() const {
     if (ev.kind == EventKind::MouseDown || ev.kind == EventKind::MouseUp)
       e["button"] = kButtonNames[std::size_t(std::clamp(ev.button, 0, 2))];
     if (ev.kind == EventKind::Scroll) e["dy"] = ev.scroll_y;
-    if (ev.kind == EventKind::KeyDown || ev.kind == EventKind::KeyUp) {
-      e["key"] = ev.key;
+    if (ev.kind == EventKind::KeyDown || ev.kind == EventKind::KeyUp) e["key"] = ev.key;
+    if (has_modifiers(ev.kind)) {
       if (ev.ctrl) e["ctrl"] = true;
       if (ev.shift) e["shift"] = true;
       if (ev.alt) e["alt"] = true;

@@ -105,8 +105,10 @@ void attribute(GLuint index, GLint components, GLsizei stride_floats, std::size_
 MeshBuffer::MeshBuffer() {
   glGenVertexArrays(1, &m_vao);
   glGenBuffers(1, &m_vbo);
+  glGenBuffers(1, &m_ebo);
   glBindVertexArray(m_vao);
   glBindBuffer(GL_ARRAY_BUFFER, m_vbo);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, m_ebo);  // kept by the vertex array
   attribute(0, 3, 9, 0);
   attribute(1, 3, 9, 3);
   attribute(2, 3, 9, 6);
@@ -114,6 +116,7 @@ MeshBuffer::MeshBuffer() {
 }
 
 MeshBuffer::~MeshBuffer() {
+  glDeleteBuffers(1, &m_ebo);
   glDeleteBuffers(1, &m_vbo);
   glDeleteVertexArrays(1, &m_vao);
 }
@@ -126,6 +129,30 @@ void MeshBuffer::upload(const geometry::TriangleMesh& mesh, const Vec3& colour, 
     for (int c = 0; c < 3; ++c) normals[std::size_t(t[std::size_t(c)])] += n;  // area-weighted
   }
   std::vector<float> data;
+  if (!flat) {
+    // Smooth: one vertex per mesh vertex, drawn through the triangles' indices, so each vertex
+    // is shaded once, not once per triangle (a third to a sixth of the vertex work: what limits
+    // a software rasteriser on large surfaces).
+    data.reserve(mesh.vertices.size() * 9);
+    for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
+      const Vec3 n = normals[v].norm() > 0 ? Vec3(normals[v].normalized()) : Vec3::Zero();
+      for (int a = 0; a < 3; ++a) data.push_back(float(mesh.vertices[v][a]));
+      for (int a = 0; a < 3; ++a) data.push_back(float(n[a]));
+      for (int a = 0; a < 3; ++a) data.push_back(float(colour[a]));
+    }
+    std::vector<GLuint> indices;
+    indices.reserve(mesh.triangles.size() * 3);
+    for (const Tri& t : mesh.triangles)
+      for (std::int32_t v : t) indices.push_back(GLuint(v));
+    glBindBuffer(GL_ARRAY_BUFFER, m_vbo);
+    glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(data.size() * sizeof(float)), data.data(), GL_DYNAMIC_DRAW);
+    glBindVertexArray(m_vao);
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(indices.size() * sizeof(GLuint)), indices.data(), GL_DYNAMIC_DRAW);
+    glBindVertexArray(0);
+    m_count = GLsizei(indices.size());
+    m_indexed = true;
+    return;
+  }
   data.reserve(mesh.triangles.size() * 27);
   for (const Tri& t : mesh.triangles)
     for (int c = 0; c < 3; ++c) {
@@ -142,6 +169,7 @@ void MeshBuffer::upload(const geometry::TriangleMesh& mesh, const Vec3& colour, 
   glBindBuffer(GL_ARRAY_BUFFER, m_vbo);
   glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(data.size() * sizeof(float)), data.data(), GL_DYNAMIC_DRAW);
   m_count = GLsizei(data.size() / 9);
+  m_indexed = false;
 }
 
 void MeshBuffer::upload_coloured(const geometry::TriangleMesh& mesh, const std::vector<Vec3>& vertex_colours) {
@@ -160,12 +188,16 @@ void MeshBuffer::upload_coloured(const geometry::TriangleMesh& mesh, const std::
   glBindBuffer(GL_ARRAY_BUFFER, m_vbo);
   glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(data.size() * sizeof(float)), data.data(), GL_DYNAMIC_DRAW);
   m_count = GLsizei(data.size() / 9);
+  m_indexed = false;
 }
 
 void MeshBuffer::draw() const {
   if (m_count == 0) return;
   glBindVertexArray(m_vao);
-  glDrawArrays(GL_TRIANGLES, 0, m_count);
+  if (m_indexed)
+    glDrawElements(GL_TRIANGLES, m_count, GL_UNSIGNED_INT, nullptr);
+  else
+    glDrawArrays(GL_TRIANGLES, 0, m_count);
   glBindVertexArray(0);
 }
 
@@ -261,14 +293,22 @@ Painter::~Painter() {
   glDeleteProgram(m_slice);
 }
 
-void Painter::draw_mesh(const MeshBuffer& mesh, const Mat4f& mvp, const Mat4f& view, const Eigen::Vector4f& clip) const {
+void Painter::draw_mesh(const MeshBuffer& mesh, const Mat4f& mvp, const Mat4f& view, const Eigen::Vector4f& clip,
+                        bool cull_back) const {
   glUseProgram(m_mesh);
   glUniformMatrix4fv(glGetUniformLocation(m_mesh, "mvp"), 1, GL_FALSE, mvp.data());
   glUniformMatrix4fv(glGetUniformLocation(m_mesh, "view"), 1, GL_FALSE, view.data());
   glUniform4fv(glGetUniformLocation(m_mesh, "clip"), 1, clip.data());
-  glEnable(GL_CLIP_DISTANCE0);
+  const bool clipped = clip != Eigen::Vector4f(0, 0, 0, 1);  // the default keeps everything: no clipping work
+  if (clipped) glEnable(GL_CLIP_DISTANCE0);
+  if (cull_back) {
+    glFrontFace(GL_CCW);
+    glCullFace(GL_BACK);
+    glEnable(GL_CULL_FACE);
+  }
   mesh.draw();
-  glDisable(GL_CLIP_DISTANCE0);
+  if (cull_back) glDisable(GL_CULL_FACE);
+  if (clipped) glDisable(GL_CLIP_DISTANCE0);
 }
 
 void Painter::draw_lines(const LineBuffer& lines, const Mat4f& mvp) const {

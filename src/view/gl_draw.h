@@ -27,17 +27,19 @@ class MeshBuffer {
   ~MeshBuffer();
   MeshBuffer(const MeshBuffer&) = delete;
   MeshBuffer& operator=(const MeshBuffer&) = delete;
-  /// Uploads @p mesh in one colour (RGB 0..1) with smooth (area-weighted) vertex normals, or
-  /// one normal per triangle if @p flat.
+  /// Uploads @p mesh in one colour (RGB 0..1) with smooth (area-weighted) vertex normals, drawn
+  /// indexed (each vertex shaded once), or one normal per triangle if @p flat.
   void upload(const geometry::TriangleMesh& mesh, const Vec3& colour, bool flat = false);
   /// Uploads @p mesh with one colour per vertex (RGB 0..1) and one normal per triangle.
   void upload_coloured(const geometry::TriangleMesh& mesh, const std::vector<Vec3>& vertex_colours);
+  /// The triangle corners drawn (3 per triangle).
   [[nodiscard]] GLsizei vertex_count() const { return m_count; }
   void draw() const;
 
  private:
-  GLuint m_vao = 0, m_vbo = 0;
+  GLuint m_vao = 0, m_vbo = 0, m_ebo = 0;
   GLsizei m_count = 0;
+  bool m_indexed = false;  // drawn through the element buffer
 };
 
 /// Coloured line segments (pairs of points) or points.
@@ -85,9 +87,12 @@ class Painter {
   Painter(const Painter&) = delete;
   Painter& operator=(const Painter&) = delete;
   /// Draws lit triangles: @p mvp world → clip, @p view world → eye (for the headlight); only
-  /// where dot(@p clip, (x, 1)) ≥ 0 (the default keeps everything).
+  /// where dot(@p clip, (x, 1)) ≥ 0 (the default keeps everything). With @p cull_back the
+  /// triangles seen from behind (clockwise on screen) are skipped: for a closed surface whose
+  /// triangles are counter-clockwise seen from outside, which then looks the same at half the
+  /// rasterising.
   void draw_mesh(const MeshBuffer& mesh, const Mat4f& mvp, const Mat4f& view,
-                 const Eigen::Vector4f& clip = Eigen::Vector4f(0, 0, 0, 1)) const;
+                 const Eigen::Vector4f& clip = Eigen::Vector4f(0, 0, 0, 1), bool cull_back = false) const;
   void draw_lines(const LineBuffer& lines, const Mat4f& mvp) const;
   /// grey = (value − (level − window/2)) / window, clamped to 0..1.
   void draw_slice(const SliceQuad& quad, const Mat4f& mvp, double window, double level) const;

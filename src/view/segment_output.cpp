@@ -4,11 +4,11 @@
 #include <cmath>
 
 #include <fmt/format.h>
-#include <nlohmann/json.hpp>
 
 #include "ido/core/atomic_file.h"
 #include "ido/core/error.h"
 #include "ido/io/mesh_io.h"
+#include "ido/io/report_json.h"
 #include "ido/io/volume_io.h"
 
 namespace ido::view {
@@ -24,65 +24,24 @@ void check_segment_outputs(const SegmentOutputs& o) {
         fmt::format("{}: the mask output must be a volume file (.nii, .nii.gz, .nrrd, .mha)", o.mask.string()));
 }
 
-nlohmann::json segment_report_json(const SegmentRequest& request, const segment::BalloonResult& result,
-                                   const SegmentOutputs& outputs) {
-  const segment::BalloonReport& rep = result.report;
+io::Json segment_report_json(const SegmentRequest& request, const segment::BalloonResult& result,
+                             const SegmentOutputs& outputs) {
   const segment::BalloonOptions& bo = request.options;
-  nlohmann::json seeds = nlohmann::json::array();
-  for (const Vec3& s : request.seeds_mm) seeds.push_back({s.x(), s.y(), s.z()});
-  nlohmann::json events = nlohmann::json::array(), markers = nlohmann::json::array();
-  for (const segment::LeakEvent& e : rep.leaks)
-    events.push_back({{"cause", segment::leak_cause_name(e.cause)},
-                      {"position_mm", {e.position_mm.x(), e.position_mm.y(), e.position_mm.z()}},
-                      {"iteration", e.iteration},
-                      {"neck_area_mm2", e.neck_area_mm2},
-                      {"neck_radius_mm", e.neck_radius_mm}});
-  for (const Vec3& m : rep.neighbour_markers_mm) markers.push_back({m.x(), m.y(), m.z()});
-  const nlohmann::json leak = {
-      {"seed_radius_mm", rep.seed_radius_mm},
-      {"chamber_radius_mm",
-       std::isfinite(rep.chamber_radius_mm) ? nlohmann::json(rep.chamber_radius_mm) : nlohmann::json(nullptr)},
-      {"neighbour_markers_mm", markers},
-      {"events", events}};
-  return {
-      {"input", request.input},
-      {"seeds_mm", seeds},
-      {"reference", rep.model.reference},
-      {"tolerance", rep.model.tolerance},
-      {"accept_brighter", rep.model.accept_brighter},
-      {"iterations", rep.iterations},
-      {"organ", segment::organ_name(request.organ)},
-      {"edge_reach_voxels", bo.edge_reach_voxels},
-      {"outside_level", bo.outside_level ? nlohmann::json(*bo.outside_level) : nlohmann::json(nullptr)},
-      {"leak_control", leak},
-      {"seconds", rep.seconds},
-      {"phase_seconds",
-       {{"setup", rep.phase_seconds.setup},
-        {"move", rep.phase_seconds.move},
-        {"remesh", rep.phase_seconds.remesh},
-        {"intersections", rep.phase_seconds.intersections},
-        {"repair", rep.phase_seconds.repair}}},
-      {"volume_mm3", rep.volume_mm3},
-      {"area_mm2", rep.area_mm2},
-      {"vertices", rep.vertices},
-      {"edges", rep.edges},
-      {"triangles", rep.triangles},
-      {"euler_characteristic", rep.euler_characteristic},
-      {"components", rep.components},
-      {"closed", rep.closed},
-      {"manifold", rep.manifold},
-      {"oriented", rep.oriented},
-      {"self_intersections", rep.self_intersections},
-      {"repairs", rep.repairs},
-      {"local_repairs", rep.local_repairs},
-      {"inflation_vertex_steps", rep.inflation_vertex_steps},
-      {"slept_vertex_steps", rep.slept_vertex_steps},
-      {"frozen_vertices", rep.frozen_vertices},
-      {"converged", rep.converged},
-      {"stop_reason", rep.stop_reason},
-      {"leak_warning", rep.leak_warning},
-      {"surface", outputs.surface.empty() ? nlohmann::json(nullptr) : nlohmann::json(outputs.surface.string())},
-      {"mask", outputs.mask.empty() ? nlohmann::json(nullptr) : nlohmann::json(outputs.mask.string())}};
+  const auto points = [](const std::vector<Vec3>& ps) {
+    io::Json out = io::Json::array();
+    for (const Vec3& p : ps) out.push_back(io::Json::array({p.x(), p.y(), p.z()}));
+    return out;
+  };
+  io::Json j = {{"input", request.input},
+                {"seeds_mm", points(request.seeds_mm)},
+                {"organ", segment::organ_name(request.organ)},
+                {"edge_reach_voxels", bo.edge_reach_voxels},
+                {"outside_level", bo.outside_level ? io::Json(*bo.outside_level) : io::Json(nullptr)}};
+  j.update(io::to_json(result.report));  // the balloon's figures, as every report writes them
+  j["leak_control"]["stop_points_mm"] = points(bo.leak.stop_points_mm);
+  j["surface"] = outputs.surface.empty() ? io::Json(nullptr) : io::Json(outputs.surface.string());
+  j["mask"] = outputs.mask.empty() ? io::Json(nullptr) : io::Json(outputs.mask.string());
+  return j;
 }
 
 void save_segmentation(const SegmentOutputs& outputs, const image::Volume<float>& ct, const SegmentRequest& request,

@@ -62,6 +62,7 @@ void SegmentSession::work(Run& run, const image::Volume<float>& ct) {
     s->steps = steps;
     s->surface = std::move(surface);
     s->seeds_mm = run.seeds;
+    s->options = run.options;
     s->result = std::move(result);
     s->error = std::move(error);
     run.states.write(std::shared_ptr<const SegmentState>(std::move(s)));
@@ -132,6 +133,7 @@ void SegmentSession::start(std::vector<Vec3> seeds_mm, const segment::BalloonOpt
   preparing->run = m_runs;
   preparing->stage = SegmentStage::Preparing;
   preparing->seeds_mm = m_current->seeds;
+  preparing->options = m_current->options;
   m_latest = std::move(preparing);
 }
 

@@ -33,6 +33,7 @@
 
 #include "ido/core/atomic_file.h"
 #include "ido/core/error.h"
+#include "ido/drill/udp_bridge.h"
 #include "ido/geometry/mesh_checks.h"
 #include "ido/geometry/tet_quality.h"
 #include "ido/io/mesh_io.h"
@@ -58,6 +59,7 @@ using Clock = std::chrono::steady_clock;
 constexpr double kPanelWidthPx = 340.0;
 const Vec3 kBalloonColour(0.85, 0.55, 0.4);  // as `ido segment --snapshots`
 const Vec3 kSeedColour(0.1, 1.0, 0.2);
+const Vec3 kStopColour(0.2, 0.75, 1.0);
 const Vec3 kContourColour(1.0, 0.15, 0.1);
 const Vec3 kCrosshairColour(0.9, 0.8, 0.2);
 const Vec3 kSectionColour(1.0, 0.85, 0.3);
@@ -123,7 +125,20 @@ struct SceneObject {
   bool visible = true;
   std::unique_ptr<gl::MeshBuffer> gpu;
   std::shared_ptr<const geometry::TetMesh> tets = nullptr;  ///< a tetrahedral mesh file's cells (shared with mesh jobs)
+  bool cull_back = false;  ///< one closed surface, outward: its back faces are not drawn
 };
+
+/// True for one closed, oriented surface whose triangles are counter-clockwise seen from
+/// outside: its back faces are hidden behind its front, so they need not be drawn.
+bool closed_outward(const geometry::TriangleMesh& mesh) {
+  if (mesh.triangles.empty()) return false;
+  try {
+    const geometry::MeshCheckReport r = geometry::check_mesh(mesh);
+    return r.closed && r.oriented && r.vertex_manifold && r.components == 1 && r.signed_volume_mm3 > 0;
+  } catch (const std::exception&) {
+    return false;
+  }
+}
 
 /// Work on its own thread whose end the frame loop polls (saving files, tetrahedralising).
 struct Job {
@@ -141,7 +156,12 @@ struct MeshResult {
   geometry::TriangleMesh boundary;
 };
 
-enum class Workspace { Segment, Scene, Mesh, Drill, Deform };
+/// What a click on a slice placed: a seed, or a stop point (the balloon's front does not pass it).
+enum class MarkKind { Seed, Stop };
+struct Mark {
+  MarkKind kind = MarkKind::Seed;
+  Index3 voxel = {0, 0, 0};
+};
 
 /// What the Deform workspace colours its bodies by.
 enum class DeformField { Displacement, VonMises, Strain };
@@ -188,6 +208,8 @@ class Workbench {
   Workbench(const Workbench&) = delete;
   Workbench& operator=(const Workbench&) = delete;
   void run();
+  /// What run() measured (moved out).
+  [[nodiscard]] WorkbenchStats take_stats() { return std::move(m_stats); }
 
  private:
   // set-up
@@ -203,9 +225,10 @@ class Workbench {
   void view_scroll(const InputEvent& e);
   void shortcut(const InputEvent& e);
   // actions
-  void place_seed(const Index3& voxel);
+  void place_mark(MarkKind kind, const Index3& voxel);
   void restart_balloon();
-  void undo_seed();
+  void undo_mark();
+  [[nodiscard]] std::vector<Vec3> marks_mm(MarkKind kind) const;
   void toggle_pause();
   void step_once();
   void accept();
@@ -216,12 +239,20 @@ class Workbench {
   void rebuild_section();
   void drill_panel();
   void deform_panel();
+  void energy_plots(const DeformState& st);
+  void parameter_panel(const DeformState& st);
   void update_deform();
   void grab(double x_px, double y_px);
   void colour_bar();
   void write_deform_log();
   void toggle_drilling();
+  void start_drilling(std::unique_ptr<drill::HapticDevice> source, double max_duration_s, const std::string& what);
+  void replay_path();
+  void connect_device();
   void move_tool(const Vec3& position_mm);
+  void draw_tool(const drill::ToolPose& pose);
+  void turn_tool(double tilt_deg, double azimuth_deg);
+  [[nodiscard]] Eigen::Quaterniond tool_orientation() const;
   void drill_ended();
   [[nodiscard]] std::shared_ptr<const geometry::TetMesh> drill_material() const;
   [[nodiscard]] bool drilling() { return m_drill && m_drill->started() && !m_drill->ended(); }
@@ -284,7 +315,8 @@ class Workbench {
   // segmentation
   std::unique_ptr<SegmentSession> m_session;
   segment::Organ m_organ = segment::Organ::Generic;
-  std::vector<Index3> m_seed_voxels;
+  std::vector<Mark> m_placed;  // seeds and stop points in the order placed (ctrl+z removes the last)
+  bool m_click_stops = false;  // a plain click places a stop point (shift+click always does)
   std::shared_ptr<const SegmentState> m_state;
   bool m_contours_dirty = true;
   int m_accepted = 0;
@@ -311,11 +343,15 @@ class Workbench {
   std::unique_ptr<DrillSession> m_drill;
   bool m_drill_reported = false;
   Vec3 m_tool_mm = Vec3::Zero();
+  double m_tool_tilt_deg = 0.0, m_tool_azimuth_deg = 0.0;  // the tool's axis (its shaft): see tool_orientation()
+  Eigen::Quaterniond m_tool_shown = Eigen::Quaterniond::Identity();  // drawn, when a path or device moves the tool
   std::shared_ptr<const DrillSnapshot> m_drill_surface;
   std::unique_ptr<gl::MeshBuffer> m_drill_gpu, m_tool_gpu;
   std::unique_ptr<gl::LineBuffer> m_force_lines;
   DrillFigures m_figures;
   std::string m_drill_summary;
+  std::string m_drill_source = "mouse";  // what moved the tool of the last session: mouse, path:FILE, udp:PORT
+  std::array<char, 1024> m_replay_path{};  // the panel's path CSV to replay
 
   // deformation
   std::unique_ptr<DeformSession> m_deform;
@@ -331,10 +367,15 @@ class Workbench {
   double m_grab_stiffness_n_per_mm = 0.1;
   std::int32_t m_logged_particle = -1;
   nlohmann::json m_deform_log = nlohmann::json::array();
+  std::vector<double> m_parameter_edit;  // the panel's values of the scene's parameters
+  std::vector<double> m_parameter_seen;  // the values in use when they were last taken over
+  std::string m_parameter_error_seen;
+  int m_focus_parameter = -1;  // the parameter field to give the keyboard to (e)
 
   // frame timing
   std::vector<double> m_frame_ms;
   Clock::time_point m_last_frame = Clock::now();
+  WorkbenchStats m_stats;
 };
 
 Workbench::Workbench(const WorkbenchOptions& options)
@@ -344,6 +385,9 @@ Workbench::Workbench(const WorkbenchOptions& options)
     throw InvalidInput(fmt::format("--tet-output {}: must be a .vtu, .msh or .node file", m_options.tet_output.string()));
   if (!(m_options.burr_radius_mm > 0) || !std::isfinite(m_options.burr_radius_mm))
     throw InvalidInput(fmt::format("--burr-radius {}: must be a positive length (mm)", m_options.burr_radius_mm));
+  if (!(m_options.shaft_radius_mm >= 0) || !(m_options.shaft_radius_mm < m_options.burr_radius_mm))
+    throw InvalidInput(fmt::format("--shaft-radius {}: must be 0 (no shaft) or less than the burr radius ({} mm)",
+                                   m_options.shaft_radius_mm, m_options.burr_radius_mm));
   if (!(m_options.drill_max_s > 0) || m_options.drill_max_s > drill::kMaxScriptDuration_s)
     throw InvalidInput(fmt::format("--drill-max {}: a session lasts 0..{} s", m_options.drill_max_s, drill::kMaxScriptDuration_s));
   if (!(m_tet_edge_mm >= 0) || !std::isfinite(m_tet_edge_mm))
@@ -365,13 +409,20 @@ Workbench::Workbench(const WorkbenchOptions& options)
   if (m_options.width_px < 64 || m_options.height_px < 64 || m_options.width_px > 8192 || m_options.height_px > 8192)
     throw InvalidInput("the window size must be 64..8192 pixels each way");
   load_files();
-  if (m_ct) {
-    for (const Index3& v : m_options.seed_voxels)
+  for (const auto& [voxels, option] :
+       {std::pair{&m_options.seed_voxels, "--seed-voxel"}, {&m_options.stop_voxels, "--stop-voxel"}}) {
+    if (!m_ct && !voxels->empty()) throw InvalidInput(fmt::format("{} needs a volume to segment", option));
+    for (const Index3& v : *voxels)
       if (!m_ct->contains(v[0], v[1], v[2]))
-        throw InvalidInput(fmt::format("--seed-voxel {},{},{}: outside the {}x{}x{} volume", v[0], v[1], v[2],
+        throw InvalidInput(fmt::format("{} {},{},{}: outside the {}x{}x{} volume", option, v[0], v[1], v[2],
                                        m_ct->size(0), m_ct->size(1), m_ct->size(2)));
-  } else if (!m_options.seed_voxels.empty()) {
-    throw InvalidInput("--seed-voxel needs a volume to segment");
+  }
+  if (m_options.drill_udp_port < 0 || m_options.drill_udp_port > 65535)
+    throw InvalidInput(fmt::format("--drill-udp {}: a UDP port is 0..65535 (0: any free port)", m_options.drill_udp_port));
+  if (!m_options.drill_replay.empty()) {
+    (void)drill::ScriptedTrajectory::load_csv(m_options.drill_replay, 1);  // a bad path is refused now, by name
+    const std::string p = m_options.drill_replay.string();
+    std::copy_n(p.begin(), std::min(p.size(), m_replay_path.size() - 1), m_replay_path.begin());
   }
   open_window();
 }
@@ -431,8 +482,10 @@ void Workbench::load_files() {
       if (!m_deform && !scene.bodies.empty()) {  // the first scene is the Deform workspace's
         m_rest_positions = scene.world.particles().positions();
         for (const io::SceneBody& b : scene.bodies) m_body_surfaces.push_back(body_surface(b));
-        m_deform = std::make_unique<DeformSession>(std::move(scene));
+        m_deform = std::make_unique<DeformSession>(f);  // keeps the file's text: its parameters can change
         m_deform_state = m_deform->latest();
+        for (const SceneParameter& p : m_deform->parameters()) m_parameter_edit.push_back(p.value);
+        m_parameter_seen = m_parameter_edit;
       }
     } else if (io::is_triangle_mesh_path(f)) {
       m_objects.push_back({f.filename().string(), io::read_triangle_mesh(f),
@@ -461,6 +514,7 @@ void Workbench::load_files() {
       hi = hi.cwiseMax(p);
     }
   if (lo.allFinite() && hi.allFinite()) m_bounds = {lo, hi};
+  for (auto& o : m_objects) o.cull_back = closed_outward(o.mesh);
   if (!m_objects.empty()) m_mesh_source = 0;
   m_clip_offset_mm = 0.5 * (m_bounds[0][m_clip_axis] + m_bounds[1][m_clip_axis]);
   if (m_ct) {
@@ -497,11 +551,14 @@ void Workbench::open_window() {
     e.y_px = y;
     static_cast<Workbench*>(glfwGetWindowUserPointer(w))->on_input(e);
   });
-  glfwSetMouseButtonCallback(m_window, [](GLFWwindow* w, int button, int action, int) {
+  glfwSetMouseButtonCallback(m_window, [](GLFWwindow* w, int button, int action, int mods) {
     if (button > 2) return;
     InputEvent e;
     e.kind = action == GLFW_PRESS ? EventKind::MouseDown : EventKind::MouseUp;
     e.button = button == GLFW_MOUSE_BUTTON_LEFT ? 0 : button == GLFW_MOUSE_BUTTON_RIGHT ? 1 : 2;
+    e.ctrl = (mods & GLFW_MOD_CONTROL) != 0;
+    e.shift = (mods & GLFW_MOD_SHIFT) != 0;
+    e.alt = (mods & GLFW_MOD_ALT) != 0;
     glfwGetCursorPos(w, &e.x_px, &e.y_px);
     static_cast<Workbench*>(glfwGetWindowUserPointer(w))->on_input(e);
   });
@@ -588,11 +645,14 @@ void Workbench::open_window() {
   }
   frame_camera();
   if (m_ct && !m_options.seed_voxels.empty()) {
-    m_seed_voxels = m_options.seed_voxels;
-    const Index3& last = m_seed_voxels.back();
+    for (const Index3& v : m_options.seed_voxels) m_placed.push_back({MarkKind::Seed, v});
+    for (const Index3& v : m_options.stop_voxels) m_placed.push_back({MarkKind::Stop, v});
+    const Index3& last = m_options.seed_voxels.back();
     for (int a = 0; a < 3; ++a) m_slice[std::size_t(a)] = last[std::size_t(a)];
     for (int a = 0; a < 3; ++a) upload_slice(a);
     restart_balloon();
+  } else if (m_ct) {
+    for (const Index3& v : m_options.stop_voxels) m_placed.push_back({MarkKind::Stop, v});
   }
 }
 
@@ -775,7 +835,8 @@ void Workbench::view_mouse_down(const InputEvent& e) {
     } else if (m_workspace == Workspace::Deform)
       m_drag = e.button == 1 ? Drag::Rotate : Drag::Pan;
     else if (m_workspace == Workspace::Drill)
-      m_drag = e.button == 0 ? Drag::Tool : e.button == 1 ? Drag::Rotate : Drag::Pan;
+      m_drag = e.button == 0 ? (m_drill && m_drill->source() && drilling() ? Drag::Rotate : Drag::Tool)
+                             : e.button == 1 ? Drag::Rotate : Drag::Pan;
     else
       m_drag = e.button != 0 ? Drag::Pan : (m_workspace == Workspace::Mesh && m_clip_drag) ? Drag::Clip : Drag::Rotate;
     return;
@@ -791,7 +852,7 @@ void Workbench::view_mouse_down(const InputEvent& e) {
         voxel[std::size_t(a)] = m_slice[std::size_t(a)];
         voxel[std::size_t(v->u_axis())] = (*uv)[0];
         voxel[std::size_t(v->v_axis())] = (*uv)[1];
-        place_seed(voxel);
+        place_mark(e.shift || m_click_stops ? MarkKind::Stop : MarkKind::Seed, voxel);
       }
     }
   }
@@ -840,6 +901,7 @@ void Workbench::shortcut(const InputEvent& e) {
       m_field = static_cast<DeformField>((static_cast<int>(m_field) + 1) % 3);
       m_field_dirty = true;
     }
+    if (k == "e" && !e.ctrl && !m_deform->parameters().empty()) m_focus_parameter = 0;  // edit the first parameter
     if (k == "i" && !e.ctrl && m_deform_state) {  // the next integrator, between steps
       const auto& names = m_deform->integrators();
       const auto it = std::find(names.begin(), names.end(), m_deform_state->integrator);
@@ -849,6 +911,10 @@ void Workbench::shortcut(const InputEvent& e) {
   }
   if (m_workspace == Workspace::Drill) {
     if (k == "d" && !e.ctrl) toggle_drilling();
+    if (k == "p" && !e.ctrl) replay_path();
+    if (k == "u" && !e.ctrl) connect_device();
+    if ((k == "i" || k == "k") && !e.ctrl) turn_tool(k == "k" ? 15.0 : -15.0, 0.0);  // tilt the axis
+    if ((k == "j" || k == "l") && !e.ctrl) turn_tool(0.0, k == "l" ? 15.0 : -15.0);  // turn it about z
     return;
   }
   if (m_workspace == Workspace::Mesh) {
@@ -869,7 +935,8 @@ void Workbench::shortcut(const InputEvent& e) {
   if (!m_ct || m_workspace != Workspace::Segment) return;
   if (k == "space") toggle_pause();
   if (k == "n" && !e.ctrl) step_once();
-  if (k == "z" && e.ctrl) undo_seed();
+  if (k == "z" && e.ctrl) undo_mark();
+  if (k == "x" && !e.ctrl) m_click_stops = !m_click_stops;
   if (k == "enter" || k == "keypad_enter") accept();
   if (k == "s" && e.ctrl) save();
   if (k == "page_up" || k == "page_down") set_slice(2, m_slice[2] + (k == "page_up" ? 1 : -1));
@@ -877,30 +944,43 @@ void Workbench::shortcut(const InputEvent& e) {
 
 // ---- actions -------------------------------------------------------------------------------
 
-void Workbench::place_seed(const Index3& voxel) {
+void Workbench::place_mark(MarkKind kind, const Index3& voxel) {
   if (!m_ct || !m_ct->contains(voxel[0], voxel[1], voxel[2])) return;
-  m_seed_voxels.push_back(voxel);
+  m_placed.push_back({kind, voxel});
   for (int a = 0; a < 3; ++a) set_slice(a, voxel[std::size_t(a)]);
   const Vec3 w = m_ct->index_to_world(Vec3(double(voxel[0]), double(voxel[1]), double(voxel[2])));
-  say(fmt::format("seed {} at voxel ({}, {}, {}) = ({:.3f}, {:.3f}, {:.3f}) mm", m_seed_voxels.size(), voxel[0],
-                  voxel[1], voxel[2], w.x(), w.y(), w.z()));
+  const auto n = std::count_if(m_placed.begin(), m_placed.end(), [kind](const Mark& m) { return m.kind == kind; });
+  say(fmt::format("{} {} at voxel ({}, {}, {}) = ({:.3f}, {:.3f}, {:.3f}) mm", kind == MarkKind::Seed ? "seed" : "stop point",
+                  n, voxel[0], voxel[1], voxel[2], w.x(), w.y(), w.z()));
+  m_contours_dirty = true;
   restart_balloon();
+}
+
+std::vector<Vec3> Workbench::marks_mm(MarkKind kind) const {
+  std::vector<Vec3> out;
+  for (const Mark& m : m_placed)  // the world position as `ido segment --seed-voxel` computes it
+    if (m.kind == kind) out.push_back(m_ct->index_to_world(Vec3(double(m.voxel[0]), double(m.voxel[1]), double(m.voxel[2]))));
+  return out;
 }
 
 void Workbench::restart_balloon() {
   if (!m_session) return;
-  std::vector<Vec3> seeds;
-  for (const Index3& v : m_seed_voxels)  // the world position as `ido segment --seed-voxel` computes it
-    seeds.push_back(m_ct->index_to_world(Vec3(double(v[0]), double(v[1]), double(v[2]))));
+  segment::BalloonChoices choices;
+  choices.organ = m_organ;
+  choices.stop_points_mm = marks_mm(MarkKind::Stop);
+  const segment::BalloonOptions options = segment::balloon_options(choices);
   const bool paused = m_session->paused();
-  m_session->start(std::move(seeds), segment::organ_options(m_organ), paused);
+  m_session->start(marks_mm(MarkKind::Seed), options, paused);
   m_contours_dirty = true;
 }
 
-void Workbench::undo_seed() {
-  if (m_seed_voxels.empty()) return;
-  m_seed_voxels.pop_back();
-  say(fmt::format("seed {} removed", m_seed_voxels.size() + 1));
+void Workbench::undo_mark() {
+  if (m_placed.empty()) return;
+  const MarkKind kind = m_placed.back().kind;
+  m_placed.pop_back();
+  const auto n = std::count_if(m_placed.begin(), m_placed.end(), [kind](const Mark& m) { return m.kind == kind; });
+  say(fmt::format("{} {} removed", kind == MarkKind::Seed ? "seed" : "stop point", n + 1));
+  m_contours_dirty = true;
   restart_balloon();
 }
 
@@ -923,6 +1003,7 @@ void Workbench::accept() {
                 kObjectColours[std::size_t(m_accepted) % kObjectColours.size()], true,
                 std::make_unique<gl::MeshBuffer>()};
   o.gpu->upload(o.mesh, o.colour);
+  o.cull_back = closed_outward(o.mesh);
   m_objects.push_back(std::move(o));
   m_mesh_source = int(m_objects.size()) - 1;
   say(fmt::format("accepted segmentation {} ({} triangles)", m_accepted, m_state->result->surface.triangle_count()));
@@ -970,7 +1051,7 @@ void Workbench::save() {
     say("nothing to save: the balloon has not finished");
     return;
   }
-  SegmentRequest request{m_ct_name, m_state->seeds_mm, m_organ, segment::organ_options(m_organ)};
+  SegmentRequest request{m_ct_name, m_state->seeds_mm, m_organ, m_state->options};  // with the run's stop points
   std::shared_ptr<const segment::BalloonResult> result = m_state->result;
   std::shared_ptr<const image::Volume<float>> ct = m_ct;
   start_save([out, request, result, ct] {
@@ -1127,20 +1208,27 @@ void Workbench::rebuild_contours() {
     const double cu = double(m_slice[std::size_t(u)]), cv = double(m_slice[std::size_t(v)]);
     marks.add(Vec3(cu, -0.5, 0), Vec3(cu, nv - 0.5, 0), 0.5 * kCrosshairColour);
     marks.add(Vec3(-0.5, cv, 0), Vec3(nu - 0.5, cv, 0), 0.5 * kCrosshairColour);
-    for (const Index3& sv : m_seed_voxels) {
+    for (const Mark& m : m_placed) {
+      const Index3& sv = m.voxel;
       if (sv[std::size_t(a)] != m_slice[std::size_t(a)]) continue;
       const double su = double(sv[std::size_t(u)]), sw = double(sv[std::size_t(v)]);
       const double r = 2.0;
-      marks.add(Vec3(su - r, sw, 0), Vec3(su + r, sw, 0), kSeedColour);
-      marks.add(Vec3(su, sw - r, 0), Vec3(su, sw + r, 0), kSeedColour);
+      if (m.kind == MarkKind::Seed) {  // a cross
+        marks.add(Vec3(su - r, sw, 0), Vec3(su + r, sw, 0), kSeedColour);
+        marks.add(Vec3(su, sw - r, 0), Vec3(su, sw + r, 0), kSeedColour);
+      } else {  // an X
+        marks.add(Vec3(su - r, sw - r, 0), Vec3(su + r, sw + r, 0), kStopColour);
+        marks.add(Vec3(su - r, sw + r, 0), Vec3(su + r, sw - r, 0), kStopColour);
+      }
     }
     marks.upload();
   }
   m_marks_3d->clear();
   const double r = 3.0 * m_ct->spacing().minCoeff();
-  for (const Index3& sv : m_seed_voxels) {
-    const Vec3 w = m_ct->index_to_world(Vec3(double(sv[0]), double(sv[1]), double(sv[2])));
-    for (int c = 0; c < 3; ++c) m_marks_3d->add(w - r * Vec3::Unit(c), w + r * Vec3::Unit(c), kSeedColour);
+  for (const Mark& m : m_placed) {
+    const Vec3 w = m_ct->index_to_world(Vec3(double(m.voxel[0]), double(m.voxel[1]), double(m.voxel[2])));
+    for (int c = 0; c < 3; ++c)
+      m_marks_3d->add(w - r * Vec3::Unit(c), w + r * Vec3::Unit(c), m.kind == MarkKind::Seed ? kSeedColour : kStopColour);
   }
   m_marks_3d->upload();
 }
@@ -1192,6 +1280,14 @@ void Workbench::update_from_workers() {
       m_drill_gpu->upload(m_drill_surface->surface, kMaterialColour, /*flat=*/true);
     }
     m_figures = m_drill->figures();
+    if (m_drill->source() && m_drill->started() && m_figures.ticks > 0) {  // the tool follows the path or the device
+      const drill::ToolPose pose = m_drill->tool_pose();
+      if (pose.position_mm != m_tool_mm || pose.orientation.coeffs() != m_tool_shown.coeffs()) {
+        m_tool_mm = pose.position_mm;
+        m_tool_shown = pose.orientation;
+        draw_tool(pose);
+      }
+    }
     m_force_lines->clear();
     m_force_lines->add(m_tool_mm, m_tool_mm + 2.0 * m_figures.force_n, kForceColour);  // 2 mm per newton
     m_force_lines->upload();
@@ -1230,23 +1326,30 @@ void Workbench::panel() {
       ImGui::Separator();
       ImGui::Text("balloon: %s, %lld steps", segment_stage_name(s.stage), static_cast<long long>(s.steps));
       ImGui::Text("%zu vertices, %zu triangles", s.surface.vertex_count(), s.surface.triangle_count());
-      if (s.result)
+      if (s.result) {
         ImGui::Text("volume %.1f mm3, Euler %lld, %s", s.result->report.volume_mm3,
                     static_cast<long long>(s.result->report.euler_characteristic), s.result->report.stop_reason.c_str());
+        for (const segment::LeakEvent& e : s.result->report.leaks)
+          ImGui::Text("leak stopped (%s) at (%.1f, %.1f, %.1f) mm", segment::leak_cause_name(e.cause), e.position_mm.x(),
+                      e.position_mm.y(), e.position_mm.z());
+      }
       if (s.stage == SegmentStage::Failed) ImGui::TextWrapped("error: %s", s.error.c_str());
       if (ImGui::Button(m_session->paused() ? "Resume (space)" : "Pause (space)")) toggle_pause();
       ImGui::SameLine();
       if (ImGui::Button("Step (n)")) step_once();
-      if (ImGui::Button("Undo seed (ctrl+z)")) undo_seed();
+      if (ImGui::Button("Undo (ctrl+z)")) undo_mark();
       ImGui::SameLine();
       if (ImGui::Button("Accept (enter)")) accept();
       if (ImGui::Button("Save (ctrl+s)")) save();
       ImGui::Separator();
-      ImGui::Text("seeds (click a slice to add one):");
-      for (std::size_t i = 0; i < m_seed_voxels.size(); ++i) {
-        const Index3& v = m_seed_voxels[i];
+      ImGui::TextWrapped("click a slice: a seed (green +); shift+click: a stop point (blue x), which the front does not pass");
+      ImGui::Checkbox("clicks place stop points (x)", &m_click_stops);
+      int seeds = 0, stops = 0;
+      for (const Mark& m : m_placed) {
+        const Index3& v = m.voxel;
         const Vec3 w = m_ct->index_to_world(Vec3(double(v[0]), double(v[1]), double(v[2])));
-        ImGui::Text("%zu: (%lld, %lld, %lld) = (%.1f, %.1f, %.1f) mm", i + 1, static_cast<long long>(v[0]),
+        ImGui::Text("%s %d: (%lld, %lld, %lld) = (%.1f, %.1f, %.1f) mm", m.kind == MarkKind::Seed ? "seed" : "stop",
+                    m.kind == MarkKind::Seed ? ++seeds : ++stops, static_cast<long long>(v[0]),
                     static_cast<long long>(v[1]), static_cast<long long>(v[2]), w.x(), w.y(), w.z());
       }
       ImGui::Separator();
@@ -1354,10 +1457,48 @@ std::shared_ptr<const geometry::TetMesh> Workbench::drill_material() const {
   return nullptr;
 }
 
+Eigen::Quaterniond Workbench::tool_orientation() const {
+  // The shaft (the tool's +z) tilted by m_tool_tilt_deg from +z towards +x, then turned by
+  // m_tool_azimuth_deg about +z.
+  return Eigen::Quaterniond(Eigen::AngleAxisd(m_tool_azimuth_deg * kPi / 180.0, Vec3::UnitZ()) *
+                            Eigen::AngleAxisd(m_tool_tilt_deg * kPi / 180.0, Vec3::UnitY()));
+}
+
 void Workbench::move_tool(const Vec3& position_mm) {
   m_tool_mm = position_mm;
-  if (m_drill && drilling()) m_drill->move_tool(position_mm);
-  if (m_tool_gpu) m_tool_gpu->upload(segment::balloon_icosphere(position_mm, m_options.burr_radius_mm, 2), kToolColour);
+  drill::ToolPose pose;
+  pose.position_mm = position_mm;
+  pose.orientation = tool_orientation();
+  if (m_drill && drilling()) m_drill->set_tool_pose(pose);
+  draw_tool(pose);
+}
+
+void Workbench::draw_tool(const drill::ToolPose& pose) {
+  if (!m_tool_gpu) return;
+  geometry::TriangleMesh tool = segment::balloon_icosphere(pose.position_mm, m_options.burr_radius_mm, 2);
+  // The shaft: a cylinder along the tool's axis from the burr centre (drill::ToolOptions' length);
+  // without one, a thin stub shows the axis.
+  const double r = m_options.shaft_radius_mm > 0 ? m_options.shaft_radius_mm : 0.15 * m_options.burr_radius_mm;
+  const double length = m_options.shaft_radius_mm > 0 ? drill::ToolOptions{}.shaft_length_mm : 2.5 * m_options.burr_radius_mm;
+  const Mat3 rot = pose.orientation.toRotationMatrix();
+  constexpr int kSides = 16;
+  const auto base = std::int32_t(tool.vertices.size());
+  for (int i = 0; i < kSides; ++i) {
+    const double a = 2 * kPi * i / kSides;
+    for (double z : {0.0, length}) tool.vertices.push_back(pose.position_mm + rot * Vec3(r * std::cos(a), r * std::sin(a), z));
+  }
+  for (int i = 0; i < kSides; ++i) {
+    const std::int32_t a0 = base + 2 * i, a1 = a0 + 1, b0 = base + 2 * ((i + 1) % kSides), b1 = b0 + 1;
+    tool.triangles.push_back({a0, b0, b1});
+    tool.triangles.push_back({a0, b1, a1});
+  }
+  m_tool_gpu->upload(tool, kToolColour);
+}
+
+void Workbench::turn_tool(double tilt_deg, double azimuth_deg) {
+  m_tool_tilt_deg = std::clamp(m_tool_tilt_deg + tilt_deg, 0.0, 180.0);
+  m_tool_azimuth_deg = std::remainder(m_tool_azimuth_deg + azimuth_deg, 360.0);
+  move_tool(m_tool_mm);
 }
 
 void Workbench::toggle_drilling() {
@@ -1366,18 +1507,63 @@ void Workbench::toggle_drilling() {
     m_message = "stopping: finishing the erosion backlog...";
     return;
   }
+  start_drilling(nullptr, m_options.drill_max_s, "mouse");
+}
+
+void Workbench::start_drilling(std::unique_ptr<drill::HapticDevice> source, double max_duration_s, const std::string& what) {
+  if (drilling()) {
+    say("a drilling session is running: stop it first (d)");
+    return;
+  }
   const auto material = drill_material();
   if (!material) return;
   try {
-    m_drill = std::make_unique<DrillSession>(*material, drill_cli_options(m_options.burr_radius_mm), m_options.drill_max_s);
+    m_drill = std::make_unique<DrillSession>(
+        *material, drill_cli_options(m_options.burr_radius_mm, m_options.shaft_radius_mm), max_duration_s, std::move(source));
   } catch (const std::exception& e) {
     say(std::string("cannot drill: ") + e.what());
     return;
   }
   m_drill_reported = false;
   m_drill_surface.reset();
-  m_drill->start(m_tool_mm);
-  say(fmt::format("drilling: burr radius {} mm, at most {} s", m_options.burr_radius_mm, m_options.drill_max_s));
+  m_drill_source = what;
+  drill::ToolPose pose;
+  pose.position_mm = m_tool_mm;
+  pose.orientation = tool_orientation();
+  m_drill->start(pose);
+  say(fmt::format("drilling ({}): burr radius {} mm, at most {:.4g} s", what, m_options.burr_radius_mm, max_duration_s));
+}
+
+void Workbench::replay_path() {
+  const fs::path csv(m_replay_path.data());
+  if (csv.empty()) {
+    say("nothing to replay: give a path CSV (--drill-replay, or the panel's field)");
+    return;
+  }
+  std::unique_ptr<drill::ScriptedTrajectory> device;
+  try {
+    device = load_path_device(csv, drill_cli_options(m_options.burr_radius_mm, m_options.shaft_radius_mm));
+  } catch (const std::exception& e) {
+    say(std::string("cannot replay: ") + e.what());
+    return;
+  }
+  // The session ends with the path (and its erosion backlog), as `ido drill --path` does.
+  const double duration = std::min(device->duration() + 1.0, drill::kMaxScriptDuration_s);
+  start_drilling(std::move(device), duration, "path:" + csv.string());
+}
+
+void Workbench::connect_device() {
+  std::unique_ptr<drill::UdpBridge> bridge;
+  try {
+    drill::UdpBridgeOptions o;
+    o.port = static_cast<std::uint16_t>(m_options.drill_udp_port);
+    bridge = std::make_unique<drill::UdpBridge>(o);
+  } catch (const std::exception& e) {
+    say(std::string("cannot open the device bridge: ") + e.what());
+    return;
+  }
+  const std::uint16_t port = bridge->port();
+  start_drilling(std::move(bridge), m_options.drill_max_s, fmt::format("udp:{}", port));
 }
 
 void Workbench::drill_ended() {
@@ -1402,6 +1588,8 @@ void Workbench::drill_ended() {
         return nlohmann::json{{"p50", p.p50}, {"p99", p.p99}, {"p999", p.p999}, {"max", p.max}, {"count", p.count}};
       };
       const nlohmann::json j = {{"burr_radius_mm", m_options.burr_radius_mm},
+                                {"shaft_radius_mm", m_options.shaft_radius_mm},
+                                {"source", m_drill_source},
                                 {"initial_volume_mm3", m_drill->initial_volume_mm3()},
                                 {"removed_volume_mm3", st.removed_volume_mm3},
                                 {"haptic_ticks", st.haptic_ticks},
@@ -1410,6 +1598,7 @@ void Workbench::drill_ended() {
                                 {"peak_force_n", st.peak_force_n},
                                 {"update_time_ms", json_of(update)},
                                 {"haptic_period_ms", json_of(period)},
+                                {"force_compute_ms", json_of(ms(st.force_compute_time_s))},
                                 {"path", m_options.drill_path.empty() ? nlohmann::json(nullptr)
                                                                       : nlohmann::json(m_options.drill_path.string())}};
       const std::string text = j.dump(2) + "\n";
@@ -1424,8 +1613,30 @@ void Workbench::drill_panel() {
   ImGui::TextWrapped("left drag: move the burr in the view's plane; wheel: depth; right drag: turn; d: start / stop");
   const bool running = drilling();
   if (ImGui::Button(running ? "Stop (d)" : "Start drilling (d)")) toggle_drilling();
+  ImGui::Separator();
+  ImGui::Text("path CSV to replay (as ido drill --path):");
+  ImGui::PushItemWidth(-1);
+  ImGui::InputText("##replay", m_replay_path.data(), m_replay_path.size());
+  ImGui::PopItemWidth();
+  if (ImGui::Button("Replay path (p)")) replay_path();
+  ImGui::SameLine();
+  if (ImGui::Button("Connect device (u)")) connect_device();
+  if (m_drill && running) {
+    if (const auto* bridge = dynamic_cast<const drill::UdpBridge*>(m_drill->source()))
+      ImGui::Text("device bridge on 127.0.0.1:%u: %llu packets (%llu rejected)", unsigned(bridge->port()),
+                  static_cast<unsigned long long>(bridge->received_packets()),
+                  static_cast<unsigned long long>(bridge->rejected_packets()));
+    else if (const auto* path = dynamic_cast<const drill::ScriptedTrajectory*>(m_drill->source()))
+      ImGui::Text("replaying %.2f s of path", path->duration());
+  }
+  ImGui::Separator();
   ImGui::Text("burr (%.1f, %.1f, %.1f) mm, radius %.1f mm", m_tool_mm.x(), m_tool_mm.y(), m_tool_mm.z(),
               m_options.burr_radius_mm);
+  if (m_options.shaft_radius_mm > 0) ImGui::Text("shaft radius %.2f mm", m_options.shaft_radius_mm);
+  float tilt = float(m_tool_tilt_deg), azimuth = float(m_tool_azimuth_deg);
+  const bool tilted = ImGui::SliderFloat("tilt (i, k)", &tilt, 0.0f, 180.0f, "%.0f deg");
+  const bool turned = ImGui::SliderFloat("turn (j, l)", &azimuth, -180.0f, 180.0f, "%.0f deg");
+  if (tilted || turned) turn_tool(double(tilt) - m_tool_tilt_deg, double(azimuth) - m_tool_azimuth_deg);
   if (!m_drill) return;
   const DrillFigures& f = m_figures;
   ImGui::Separator();
@@ -1446,6 +1657,12 @@ void Workbench::update_deform() {
   const bool fresh = s != m_deform_state;
   if (fresh) {
     m_deform_state = std::move(s);
+    // The panel's parameter fields show the values in use once they change (or a change is refused).
+    if (m_deform_state->parameters != m_parameter_seen || m_deform_state->parameter_error != m_parameter_error_seen) {
+      m_parameter_seen = m_deform_state->parameters;
+      m_parameter_error_seen = m_deform_state->parameter_error;
+      m_parameter_edit = m_parameter_seen;
+    }
     if (m_logged_particle >= 0 && std::size_t(m_logged_particle) < m_deform_state->positions_mm.size()) {
       const Vec3& p = m_deform_state->positions_mm[std::size_t(m_logged_particle)];
       m_deform_log.push_back({{"frame", m_frame},
@@ -1589,7 +1806,11 @@ void Workbench::deform_panel() {
                 st.grab_stiffness_n_per_mm < m_grab.stiffness_n_per_mm ? " (capped for stability)" : "");
   ImGui::Text("t = %.4f s, %lld steps of %.4g s", st.time_s, static_cast<long long>(st.steps), m_deform->dt_s());
   if (!st.error.empty()) ImGui::TextWrapped("stopped: %s", st.error.c_str());
-  if (st.history.empty()) return;
+  if (!st.history.empty()) energy_plots(st);
+  parameter_panel(st);
+}
+
+void Workbench::energy_plots(const DeformState& st) {
   const EnergySample& last = st.history.back();
   ImGui::Text("energy (mJ): kinetic %.4g, elastic %.4g, total %.4g", last.kinetic_mj, last.elastic_mj, last.total_mj);
   auto plot = [&](const char* label, double EnergySample::*member, const char* unit) {
@@ -1605,6 +1826,35 @@ void Workbench::deform_panel() {
   plot("step time", &EnergySample::step_ms, "ms");
 }
 
+void Workbench::parameter_panel(const DeformState& st) {
+  const auto& params = m_deform->parameters();
+  if (params.empty() || m_parameter_edit.size() != params.size()) return;
+  if (m_focus_parameter >= 0) ImGui::SetNextItemOpen(true);
+  if (ImGui::CollapsingHeader("model parameters", ImGuiTreeNodeFlags_DefaultOpen)) {
+    ImGui::TextWrapped("enter applies a value between two steps; e: edit the first");
+    bool apply = false;
+    ImGui::PushItemWidth(-1);
+    for (std::size_t i = 0; i < params.size(); ++i) {
+      ImGui::TextUnformatted(params[i].label.c_str());
+      if (m_focus_parameter == int(i)) {
+        ImGui::SetKeyboardFocusHere();
+        m_focus_parameter = -1;
+      }
+      ImGui::PushID(int(i));
+      apply |= ImGui::InputDouble("##parameter", &m_parameter_edit[i], 0.0, 0.0, "%.6g",
+                                  ImGuiInputTextFlags_EnterReturnsTrue | ImGuiInputTextFlags_CharsScientific |
+                                      ImGuiInputTextFlags_AutoSelectAll);
+      ImGui::PopID();
+    }
+    ImGui::PopItemWidth();
+    if (apply) m_deform->set_parameters(m_parameter_edit);
+    if (!st.parameter_error.empty()) ImGui::TextWrapped("refused: %s", st.parameter_error.c_str());
+    if (!st.changes.empty())
+      ImGui::Text("%zu changes, the last before step %lld", st.changes.size(),
+                  static_cast<long long>(st.changes.back().step + 1));
+  }
+}
+
 void Workbench::write_deform_log() {
   if (m_options.deform_log.empty() || !m_deform) return;
   nlohmann::json rest = nullptr;
@@ -1612,7 +1862,24 @@ void Workbench::write_deform_log() {
     const Vec3& r = m_rest_positions[std::size_t(m_logged_particle)];
     rest = {r.x(), r.y(), r.z()};
   }
-  const nlohmann::json j = {{"particle", m_logged_particle}, {"rest_mm", rest}, {"samples", m_deform_log}};
+  nlohmann::json parameters = nlohmann::json::array(), changes = nlohmann::json::array(), final = nullptr;
+  const auto& params = m_deform->parameters();
+  for (std::size_t i = 0; i < params.size(); ++i)
+    parameters.push_back({{"pointer", params[i].pointer},
+                          {"label", params[i].label},
+                          {"file_value", params[i].value},
+                          {"value", m_deform_state && i < m_deform_state->parameters.size() ? m_deform_state->parameters[i]
+                                                                                              : params[i].value}});
+  if (m_deform_state) {
+    for (const ParameterChange& c : m_deform_state->changes)
+      changes.push_back({{"step", c.step}, {"pointer", c.pointer}, {"value", c.value}});
+    nlohmann::json positions = nlohmann::json::array();
+    for (const Vec3& p : m_deform_state->positions_mm) positions.push_back({p.x(), p.y(), p.z()});
+    final = {{"steps", m_deform_state->steps}, {"t_s", m_deform_state->time_s}, {"integrator", m_deform_state->integrator},
+             {"positions_mm", positions}};
+  }
+  const nlohmann::json j = {{"particle", m_logged_particle}, {"rest_mm", rest},        {"samples", m_deform_log},
+                            {"parameters", parameters},     {"changes", changes},     {"final", final}};
   const std::string text = j.dump(1) + "\n";
   write_file_atomically(m_options.deform_log, [&](std::ostream& out) { out << text; }, false);
 }
@@ -1695,7 +1962,7 @@ void Workbench::draw_3d(const PixelRect& r, double fb_scale, int fb_height) {
     return;
   }
   for (const auto& o : m_objects)
-    if (o.visible) m_painter->draw_mesh(*o.gpu, mvp, v);
+    if (o.visible) m_painter->draw_mesh(*o.gpu, mvp, v, Eigen::Vector4f(0, 0, 0, 1), o.cull_back);
   if (m_workspace == Workspace::Segment && m_ct) {
     m_painter->draw_mesh(*m_balloon_gpu, mvp, v);
     for (int a = 0; a < 3; ++a) m_painter->draw_slice(*m_slice_3d[std::size_t(a)], mvp, m_window_width, m_level);
@@ -1724,6 +1991,7 @@ void Workbench::draw(int fb_width, int fb_height) {
 void Workbench::run() {
   ImGuiIO& io = ImGui::GetIO();
   for (;;) {
+    const Clock::time_point frame_start = Clock::now();
     glfwPollEvents();
     if (glfwWindowShouldClose(m_window)) break;
     if (m_script && !feed_script()) break;
@@ -1761,9 +2029,15 @@ void Workbench::run() {
     glfwSwapBuffers(m_window);
     ++m_frame;
     if (!m_wait_start) ++m_script_frame;
-    if (m_options.max_frames > 0 && m_frame >= m_options.max_frames) break;
+    const bool waiting = m_wait_start.has_value();
     // While a script waits for a worker, leave it the processor (this machine may have two).
-    if (m_wait_start) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    if (waiting) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    // While drilling, at most 60 frames a second (a display's rate), so the frame loop and the
+    // software rasteriser do not take the collision thread's processor.
+    if (drilling()) std::this_thread::sleep_until(frame_start + std::chrono::microseconds(16667));
+    m_stats.frames.push_back(
+        {m_workspace, float(std::chrono::duration<double, std::milli>(Clock::now() - frame_start).count()), waiting});
+    if (m_options.max_frames > 0 && m_frame >= m_options.max_frames) break;
   }
   write_deform_log();
   if (!m_options.record.empty()) {
@@ -1780,9 +2054,21 @@ void Workbench::run() {
 
 }  // namespace
 
-void run_workbench(const WorkbenchOptions& options) {
+const char* workspace_name(Workspace workspace) noexcept {
+  switch (workspace) {
+    case Workspace::Segment: return "segment";
+    case Workspace::Scene: return "scene";
+    case Workspace::Mesh: return "mesh";
+    case Workspace::Drill: return "drill";
+    case Workspace::Deform: return "deform";
+  }
+  return "?";
+}
+
+WorkbenchStats run_workbench(const WorkbenchOptions& options) {
   Workbench bench(options);
   bench.run();
+  return bench.take_stats();
 }
 
 }  // namespace ido::view

@@ -4,6 +4,7 @@
 // (its result equals segment_balloon()'s bit for bit however it was paused and stepped).
 
 #include <chrono>
+#include <fstream>
 #include <thread>
 
 #include <gtest/gtest.h>
@@ -50,6 +51,7 @@ TEST(EventScript, RoundTripKeepsEveryField) {
   down.x_px = 11;
   down.y_px = 21;
   down.button = 1;
+  down.shift = true;  // a shift-click (a stop point on a slice)
   auto& up = add(3, EventKind::MouseUp);
   up.x_px = 12;
   up.y_px = 22;
@@ -60,6 +62,7 @@ TEST(EventScript, RoundTripKeepsEveryField) {
   auto& key = add(4, EventKind::KeyDown);
   key.key = "s";
   key.ctrl = true;
+  key.alt = true;
   add(5, EventKind::KeyUp).key = "s";
   add(5, EventKind::Char).codepoint = 0x41;
   auto& wait = add(6, EventKind::Wait);
@@ -84,6 +87,8 @@ TEST(EventScript, RoundTripKeepsEveryField) {
     EXPECT_EQ(a.scroll_y, b.scroll_y);
     EXPECT_EQ(a.key, b.key);
     EXPECT_EQ(a.ctrl, b.ctrl);
+    EXPECT_EQ(a.shift, b.shift) << i;
+    EXPECT_EQ(a.alt, b.alt) << i;
     EXPECT_EQ(a.codepoint, b.codepoint);
     EXPECT_EQ(a.name, b.name);
     EXPECT_EQ(a.until, b.until);
@@ -288,6 +293,33 @@ TEST(DrillSession, WindowMovedBurrDrillsRecordsItsPathAndHandsOverTheSurface) {
   EXPECT_TRUE(test::near(replay.poses().back().position_mm.z(), 5.0, 1e-9));
 }
 
+TEST(DrillSession, ReplayedPathMovesTheToolAndEndsWithThePath) {
+  const geometry::TetMesh block = drill::make_shape("block:16,16,8");
+  const fs::path dir = test::scratch_dir("drill-replay");
+  std::ofstream(dir / "path.csv") << "t,x,y,z\n0,8,8,11\n0.4,8,8,6\n0.6,8,8,6\n";
+  const drill::SimulatorOptions options = view::drill_cli_options(2.0);
+  auto device = view::load_path_device(dir / "path.csv", options);
+  const double duration = device->duration();
+  EXPECT_DOUBLE_EQ(duration, 0.6);
+  view::DrillSession session(block, options, duration + 1.0, std::move(device));
+  ASSERT_NE(session.source(), nullptr);
+  session.start(Vec3(0, 0, 50));  // the path, not this, places the tool
+  session.move_tool(Vec3(0, 0, 50));  // ignored: the path moves the tool
+  for (auto t0 = std::chrono::steady_clock::now();
+       !session.ended() && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60);)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  ASSERT_TRUE(session.ended()) << "the session ends when the path does";
+  EXPECT_GT(session.stats().removed_volume_mm3, 5.0) << "2 mm deep into the block";
+  EXPECT_TRUE(test::near((session.tool_pose().position_mm - Vec3(8, 8, 6)).norm(), 0.0, 1e-9));
+  session.write_path_csv(dir / "recorded.csv");
+  const auto recorded = drill::ScriptedTrajectory::load_csv(dir / "recorded.csv");
+  for (std::size_t i = 0; i < recorded.times().size(); i += 50)  // every tick on the path at its time
+    EXPECT_TRUE(test::near(recorded.poses()[i].position_mm.z(),
+                           std::max(6.0, 11.0 - 5.0 * std::min(recorded.times()[i], 0.4) / 0.4), 1e-9))
+        << recorded.times()[i];
+  EXPECT_THROW((void)view::load_path_device(dir / "missing.csv", options), IoError);
+}
+
 // ---- a scene stepped on its worker thread -------------------------------------------------------
 
 std::shared_ptr<const view::DeformState> wait_steps(view::DeformSession& s, std::int64_t steps) {
@@ -353,6 +385,78 @@ TEST(DeformSession, StepsPullsSwitchesIntegratorAndReportsEnergy) {
   EXPECT_TRUE(st->error.empty()) << st->error;
   const double back = (st->positions_mm[std::size_t(tip)] - rest[std::size_t(tip)]).norm();
   EXPECT_LT(back, 0.25 * pulled) << "after " << st->steps << " steps";
+}
+
+TEST(DeformSession, ParametersChangedBetweenStepsContinueAsTheLibraryWithTheNewValues) {
+  // A beam clamped at x = 0 sagging under gravity.
+  const std::string text = R"({
+    "dt_s": 0.005, "steps": 1, "integrator": "implicit_euler", "gravity_mm_s2": [0, 0, -9806.65],
+    "bodies": [{"name": "beam", "mesh": {"generator": "beam", "size_mm": [30, 6, 6], "cells": [6, 1, 1]},
+                "model": "corotational_fem",
+                "material": {"youngs_modulus_pa": 1e5, "poisson_ratio": 0.3, "density_kg_m3": 1000},
+                "fixed": [{"box_min_mm": [-1, -1, -1], "box_max_mm": [0.001, 7, 7]}]}]})";
+  const fs::path file = test::scratch_dir("deform-parameters") / "beam.json";
+  std::ofstream(file) << text;
+  view::DeformSession session(file);
+  // What can change: the material's three numbers and the two damping coefficients.
+  const auto& params = session.parameters();
+  ASSERT_EQ(params.size(), 5u);
+  EXPECT_EQ(params[0].pointer, "/bodies/0/material/youngs_modulus_pa");
+  EXPECT_EQ(params[0].value, 1e5);
+  EXPECT_EQ(params[2].pointer, "/bodies/0/material/density_kg_m3");
+  EXPECT_EQ(params[3].pointer, "/damping/rayleigh_mass_per_s");
+  EXPECT_EQ(params[3].value, 0.0);
+  std::vector<double> values;
+  for (const auto& p : params) values.push_back(p.value);
+  EXPECT_THROW(session.set_parameters({1.0}), InvalidInput);
+
+  // 7 steps; then a stiffer, denser, damped beam for 9 more.
+  for (int i = 0; i < 7; ++i) session.step_once();
+  ASSERT_EQ(wait_steps(session, 7)->steps, 7);
+  values[0] = 3e5;
+  values[2] = 1500;
+  values[3] = 4.0;
+  session.set_parameters(values);
+  for (int i = 0; i < 9; ++i) session.step_once();
+  auto st = wait_steps(session, 16);
+  ASSERT_EQ(st->steps, 16);
+  EXPECT_EQ(st->parameters, values);
+  ASSERT_EQ(st->changes.size(), 3u);
+  for (const auto& c : st->changes) EXPECT_EQ(c.step, 7);
+  EXPECT_TRUE(st->parameter_error.empty()) << st->parameter_error;
+
+  // The library: 7 steps of the file's scene; the scene with the new values from that state on.
+  io::Scene a = io::parse_scene(text, "beam.json", file.parent_path());
+  for (int i = 0; i < 7; ++i) a.world.step(a.dt_s);
+  nlohmann::json doc = nlohmann::json::parse(text);
+  doc["bodies"][0]["material"]["youngs_modulus_pa"] = 3e5;
+  doc["bodies"][0]["material"]["density_kg_m3"] = 1500;
+  doc["damping"]["rayleigh_mass_per_s"] = 4.0;
+  io::Scene b = io::parse_scene(doc.dump(), "beam.json", file.parent_path());
+  b.world.particles().positions() = a.world.particles().positions();
+  b.world.particles().velocities() = a.world.particles().velocities();
+  b.world.set_integrator(a.world.integrator());
+  for (int i = 0; i < 9; ++i) {
+    b.world.step(b.dt_s);
+    a.world.step(a.dt_s);
+  }
+  EXPECT_TRUE(st->positions_mm == b.world.particles().positions()) << "not the library's run with the new values";
+  EXPECT_FALSE(st->positions_mm == a.world.particles().positions()) << "the new values made no difference";
+  EXPECT_TRUE(test::near(st->time_s, 16 * 0.005, 1e-12)) << "time goes on across the change";
+
+  // A bad value is refused with the scene reader's message (naming its JSON pointer); the run
+  // goes on with the values in use.
+  std::vector<double> bad = values;
+  bad[1] = 0.6;
+  session.set_parameters(bad);
+  session.step_once();
+  st = wait_steps(session, 17);
+  EXPECT_EQ(st->steps, 17);
+  EXPECT_NE(st->parameter_error.find("/bodies/0/material/poisson_ratio"), std::string::npos) << st->parameter_error;
+  EXPECT_EQ(st->parameters, values);
+  EXPECT_EQ(st->changes.size(), 3u);
+  b.world.step(b.dt_s);
+  EXPECT_TRUE(st->positions_mm == b.world.particles().positions());
 }
 
 // ---- the balloon on its worker thread -------------------------------------------------------
@@ -455,6 +559,11 @@ TEST(SegmentOutput, ReportRecordsSeedsOrganAndSurfaceFigures) {
   EXPECT_EQ(j["triangles"].get<std::int64_t>(), std::int64_t(r.surface.triangle_count()));
   EXPECT_EQ(j["surface"], "s.stl");
   EXPECT_TRUE(j["mask"].is_null());
+  EXPECT_TRUE(j["leak_control"]["stop_points_mm"].empty());
+  // Stop points the balloon was given are listed with the leak control's figures.
+  request.options.leak.stop_points_mm = {Vec3(1.5, -2.25, 40.125)};
+  const nlohmann::json with_stop = view::segment_report_json(request, r, {});
+  EXPECT_EQ(with_stop["leak_control"]["stop_points_mm"], nlohmann::json::parse("[[1.5, -2.25, 40.125]]"));
   EXPECT_THROW(view::check_segment_outputs({"s.txt", "", ""}), InvalidInput);
   EXPECT_THROW(view::check_segment_outputs({"", "m.stl", ""}), InvalidInput);
   EXPECT_NO_THROW(view::check_segment_outputs({"s.ply", "m.nii.gz", "r.json"}));

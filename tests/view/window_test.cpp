@@ -4,23 +4,40 @@
 // world position in the report); the balloon grown in the window and saved with ctrl+s is
 // `ido segment`'s surface, mask and report from the same seed, bit for bit; the screenshot
 // shows the balloon in the 3-D view and its contour and the seed on the slice; a recorded
-// session replays to the same seed; surfaces and tetrahedral meshes show in the Scene view.
+// session replays to the same seed; surfaces and tetrahedral meshes show in the Scene view;
+// a shift-click places a stop point the balloon stops at as segment_balloon() does (and ctrl+z
+// takes one back); a Young's modulus typed into the Deform panel continues the run as the library
+// does with that modulus from that step on; a path CSV replayed in the Drill workspace removes
+// what `ido drill` removes on it.
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <set>
 #include <sstream>
 #include <string>
+#include <thread>
+
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <sys/time.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "ido/drill/haptic_device.h"
+#include "ido/drill/udp_bridge.h"
 #include "ido/io/mesh_io.h"
+#include "ido/io/scene.h"
 #include "ido/io/volume_io.h"
 #include "ido/segment/balloon.h"
+#include "ido/segment/organ.h"
 #include "ido/view/orbit_camera.h"
 #include "ido/view/slice_view.h"
 #include "support/png_read.h"
@@ -36,6 +53,7 @@ namespace fs = std::filesystem;
 constexpr int kWidth = 960, kHeight = 640;
 const view::PixelRect kAxial{340, 0, 310, 320};
 const view::PixelRect k3d{650, 0, 310, 320};
+const view::PixelRect kCoronal{340, 320, 310, 320};
 
 std::string slurp(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
@@ -429,6 +447,345 @@ TEST_F(ViewWindow, PulledPointMovesAndSpringsBackWithAColourBar) {
   EXPECT_TRUE(bottom[0] > 40 && bottom[1] < 60 && bottom[2] > 70) << int(bottom[0]) << "," << int(bottom[1]) << "," << int(bottom[2]);
 }
 
+/// A CT of a tube (radius 4 mm, 350 HU in 40 HU) along k from k = 3 to k = 44, through voxel
+/// columns (12, 12); anisotropic voxels, off-origin.
+image::Volume<float> tube_ct() {
+  image::Volume<float> ct({24, 24, 48}, Vec3(1.0, 1.1, 1.2), Vec3(5, -3, 10));
+  const Vec3 a = ct.index_to_world(Vec3(12, 12, 3)), b = ct.index_to_world(Vec3(12, 12, 44));
+  for (std::int64_t k = 0; k < ct.size(2); ++k)
+    for (std::int64_t j = 0; j < ct.size(1); ++j)
+      for (std::int64_t i = 0; i < ct.size(0); ++i) {
+        const Vec3 p = ct.index_to_world(Vec3(double(i), double(j), double(k)));
+        const double t = std::clamp((p - a).dot(b - a) / (b - a).squaredNorm(), 0.0, 1.0);
+        ct(i, j, k) = (p - (a + t * (b - a))).norm() < 4.0 ? 350.f : 40.f;
+      }
+  return ct;
+}
+
+nlohmann::json shift_click(std::int64_t frame, const char* type, double x, double y) {
+  nlohmann::json e = mouse(frame, type, x, y);
+  e["shift"] = true;
+  return e;
+}
+
+std::array<double, 2> z_range(const geometry::TriangleMesh& m) {
+  std::array<double, 2> r = {INFINITY, -INFINITY};
+  for (const Vec3& v : m.vertices) r = {std::min(r[0], v.z()), std::max(r[1], v.z())};
+  return r;
+}
+
+TEST_F(ViewWindow, StopPointShiftClickStopsTheBalloonAsTheLibraryDoes) {
+  io::write_volume(ct_path, tube_ct());
+  ct = io::read_volume(ct_path);
+  // A seed on the axial slice (scrolled from the middle, 24, down to 22); then shift-clicks on the
+  // coronal slice (now through the seed, j = 12) put a stop point above it at k = 34 and one below
+  // at k = 8; ctrl+z takes the second back.
+  const Index3 seed = {12, 12, 22}, stop = {12, 12, 34}, undone = {12, 12, 8};
+  const view::SliceView axial(2, ct.size(), ct.spacing(), kAxial), coronal(1, ct.size(), ct.spacing(), kCoronal);
+  const auto [sx, sy] = axial.pixel_of(12, 12);
+  const auto [tx, ty] = coronal.pixel_of(12, 34);
+  const auto [ux, uy] = coronal.pixel_of(12, 8);
+  nlohmann::json scroll = mouse(1, "scroll", sx, sy);
+  scroll["dy"] = -2;
+  nlohmann::json shot = event(20, "screenshot");
+  shot["name"] = "stop.png";
+  write_script(dir / "stop.json",
+               {scroll, mouse(2, "mouse_down", sx, sy), mouse(3, "mouse_up", sx, sy), shift_click(5, "mouse_down", tx, ty),
+                shift_click(6, "mouse_up", tx, ty), shift_click(8, "mouse_down", ux, uy), shift_click(9, "mouse_up", ux, uy),
+                key(11, "key_down", "z", true), key(12, "key_up", "z", true), wait(13, "segment_done"),
+                key(14, "key_down", "s", true), key(15, "key_up", "s", true), wait(16, "idle"), shot, event(21, "quit")});
+  const auto r = run_view(fmt::format("{} --script {} --screenshots {} --surface {} --report {}", ct_path.string(),
+                                      (dir / "stop.json").string(), (dir / "shots").string(),
+                                      (dir / "view.ply").string(), (dir / "view.json").string()),
+                          dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
+
+  // The library's balloon from the same seed with that stop point (the voxels' centres).
+  auto world = [&](const Index3& v) { return ct.index_to_world(Vec3(double(v[0]), double(v[1]), double(v[2]))); };
+  segment::BalloonOptions options = segment::organ_options(segment::Organ::Generic);
+  options.leak.stop_points_mm = {world(stop)};
+  const segment::BalloonResult expected = segment::segment_balloon(ct, {world(seed)}, options);
+  io::write_triangle_mesh(dir / "library.ply", expected.surface);
+  ASSERT_GT(expected.surface.triangle_count(), 100u);
+  EXPECT_EQ(slurp(dir / "view.ply"), slurp(dir / "library.ply")) << "the window's balloon differs from segment_balloon's";
+  const geometry::TriangleMesh got = io::read_triangle_mesh(dir / "view.ply");
+  EXPECT_EQ(got.vertex_count(), expected.surface.vertex_count());
+
+  // The stop point matters: the front halts below it, where without it the balloon fills the
+  // tube past it; and the undone stop point is gone: the balloon reaches below where it was.
+  const auto [zmin, zmax] = z_range(got);
+  EXPECT_LT(zmax, world(stop).z());
+  EXPECT_GT(zmax, world(seed).z() + 5.0);
+  EXPECT_LT(zmin, world(undone).z() - 2.0);
+  const auto free_run = segment::segment_balloon(ct, {world(seed)}, segment::organ_options(segment::Organ::Generic));
+  EXPECT_GT(z_range(free_run.surface)[1], world(stop).z() + 3.0);
+
+  // The report lists the seed and the stop point, and the leak the stop point held.
+  const nlohmann::json report = read_json(dir / "view.json");
+  ASSERT_EQ(report["seeds_mm"].size(), 1u);
+  ASSERT_EQ(report["leak_control"]["stop_points_mm"].size(), 1u) << report["leak_control"].dump();
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_EQ(report["seeds_mm"][0][std::size_t(c)].get<double>(), world(seed)[c]);
+    EXPECT_EQ(report["leak_control"]["stop_points_mm"][0][std::size_t(c)].get<double>(), world(stop)[c]);
+  }
+  EXPECT_EQ(report["iterations"].get<std::int64_t>(), expected.report.iterations);
+  bool stop_event = false;
+  for (const auto& e : report["leak_control"]["events"]) stop_event |= e["cause"] == "stop_point";
+  EXPECT_TRUE(stop_event) << report["leak_control"].dump();
+
+  // The picture: the stop point's blue x on the coronal slice where the click was, none where
+  // the undone one was.
+  const test::Png png = test::read_png(dir / "shots" / "stop.png");
+  ASSERT_EQ(png.w, kWidth);
+  auto stop_blue = [](int red, int green, int blue) { return blue > 200 && green > 140 && green < 230 && red < 110; };
+  EXPECT_GT(count(png, {tx - 12, ty - 12, 25, 25}, stop_blue), 3);
+  EXPECT_EQ(count(png, {ux - 12, uy - 12, 25, 25}, stop_blue), 0);
+}
+
+TEST_F(ViewWindow, ModulusTypedInTheDeformPanelContinuesTheRunAsTheLibraryDoes) {
+  // A beam clamped at x = 0 sagging under gravity (implicit Euler, damped).
+  const std::string scene_text = R"({
+    "dt_s": 0.005, "steps": 1, "integrator": "implicit_euler",
+    "gravity_mm_s2": [0, 0, -9806.65],
+    "damping": {"rayleigh_mass_per_s": 2.0},
+    "bodies": [{"name": "beam", "mesh": {"generator": "beam", "size_mm": [40, 10, 10], "cells": [8, 2, 2]},
+                "model": "corotational_fem",
+                "material": {"youngs_modulus_pa": 1e5, "poisson_ratio": 0.3, "density_kg_m3": 1000},
+                "fixed": [{"box_min_mm": [-1, -1, -1], "box_max_mm": [0.001, 11, 11]}]}]})";
+  std::ofstream(dir / "beam.json") << scene_text;
+  // Deform workspace (f5), run, pause after 30 steps or more; e gives the keyboard to the first
+  // parameter (the beam's Young's modulus): type 4e5, enter; run 30 steps more and pause.
+  nlohmann::json first = wait(5, "deform_steps"), second = wait(24, "deform_steps");
+  first["steps"] = 30;
+  second["steps"] = 30;
+  nlohmann::json events = nlohmann::json::array(
+      {key(1, "key_down", "f5", false), key(2, "key_up", "f5", false), key(3, "key_down", "space", false),
+       key(4, "key_up", "space", false), first, key(6, "key_down", "space", false), key(7, "key_up", "space", false),
+       wait(8, "idle"), key(10, "key_down", "e", false), key(11, "key_up", "e", false)});
+  std::int64_t frame = 14;
+  for (char c : std::string("4e5")) {
+    nlohmann::json ch = event(frame++, "char");
+    ch["codepoint"] = int(c);
+    events.push_back(ch);
+  }
+  for (const auto& e : {key(18, "key_down", "enter", false), key(19, "key_up", "enter", false),
+                        key(22, "key_down", "space", false), key(23, "key_up", "space", false), second,
+                        key(25, "key_down", "space", false), key(26, "key_up", "space", false), wait(27, "idle"),
+                        event(32, "quit")})
+    events.push_back(e);
+  write_script(dir / "modulus.json", events);
+  const auto r = run_view(fmt::format("{} --script {} --deform-log {}", (dir / "beam.json").string(),
+                                      (dir / "modulus.json").string(), (dir / "log.json").string()),
+                          dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json log = read_json(dir / "log.json");
+  ASSERT_EQ(log["changes"].size(), 1u) << log["changes"].dump();
+  const nlohmann::json& change = log["changes"][0];
+  EXPECT_EQ(change["pointer"], "/bodies/0/material/youngs_modulus_pa");
+  EXPECT_EQ(change["value"].get<double>(), 4e5);
+  EXPECT_EQ(log["parameters"][0]["value"].get<double>(), 4e5);
+  const std::int64_t at = change["step"].get<std::int64_t>(), steps = log["final"]["steps"].get<std::int64_t>();
+  EXPECT_GE(at, 30);
+  ASSERT_GE(steps, at + 30);
+
+  // The library: the scene for `at` steps, then the scene with the new modulus going on from
+  // that state (positions and velocities) to the window's last step.
+  io::Scene a = io::parse_scene(scene_text, "beam.json", dir);
+  for (std::int64_t i = 0; i < at; ++i) a.world.step(a.dt_s);
+  nlohmann::json doc = nlohmann::json::parse(scene_text);
+  doc["bodies"][0]["material"]["youngs_modulus_pa"] = 4e5;
+  io::Scene b = io::parse_scene(doc.dump(), "beam.json", dir);
+  b.world.particles().positions() = a.world.particles().positions();
+  b.world.particles().velocities() = a.world.particles().velocities();
+  b.world.set_integrator(a.world.integrator());
+  for (std::int64_t i = at; i < steps; ++i) {
+    b.world.step(b.dt_s);
+    a.world.step(a.dt_s);  // and the run the change did not happen in
+  }
+  const auto& window = log["final"]["positions_mm"];
+  ASSERT_EQ(window.size(), b.world.particles().size());
+  double moved = 0.0;  // how far the stiffer beam is from where the softer one would be
+  for (std::size_t i = 0; i < window.size(); ++i) {
+    const Vec3& p = b.world.particles().positions()[i];
+    for (int c = 0; c < 3; ++c) EXPECT_EQ(window[i][std::size_t(c)].get<double>(), p[c]) << "particle " << i;
+    moved = std::max(moved, (p - a.world.particles().positions()[i]).norm());
+  }
+  EXPECT_GT(moved, 0.05) << "the new modulus changed the motion";
+}
+
+TEST_F(ViewWindow, PathReplayedInTheDrillWorkspaceRemovesWhatIdoDrillRemoves) {
+  ASSERT_EQ(test::run_tool(fmt::format("tetmesh --shape block:16,16,8 -o {} -q", (dir / "block.vtu").string())).exit_code, 0);
+  // Down into the block's top (z = 8) from 4 mm above it to 3 mm in, across 2 mm, then hold.
+  std::ofstream(dir / "path.csv") << "t,x,y,z\n0,8,8,12\n0.8,8,8,5\n1.2,10,8,5\n1.4,10,8,5\n";
+  nlohmann::json shot = event(8, "screenshot");
+  shot["name"] = "replay.png";
+  write_script(dir / "replay.json", {key(1, "key_down", "f4", false), key(2, "key_up", "f4", false),
+                                     key(3, "key_down", "p", false), key(4, "key_up", "p", false), wait(5, "idle"), shot,
+                                     event(9, "quit")});
+  const auto r = run_view(fmt::format("{} --script {} --screenshots {} --drill-replay {} --drill-report {} --drill-path {}",
+                                      (dir / "block.vtu").string(), (dir / "replay.json").string(),
+                                      (dir / "shots").string(), (dir / "path.csv").string(),
+                                      (dir / "view_drill.json").string(), (dir / "recorded.csv").string()),
+                          dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json view_report = read_json(dir / "view_drill.json");
+  EXPECT_EQ(view_report["source"], "path:" + (dir / "path.csv").string());
+  const double removed = view_report["removed_volume_mm3"].get<double>();
+  EXPECT_GT(removed, 20.0) << "the burr went 3 mm deep and 2 mm across: tens of mm³";
+  const auto cli = test::run_tool(fmt::format("drill {} --tool sphere:radius=2 --path {} -o {} --report {} -q",
+                                              (dir / "block.vtu").string(), (dir / "path.csv").string(),
+                                              (dir / "out.vtu").string(), (dir / "cli_drill.json").string()));
+  ASSERT_EQ(cli.exit_code, 0) << cli.err;
+  const double replayed = read_json(dir / "cli_drill.json")["removed_volume_mm3"].get<double>();
+  EXPECT_TRUE(test::rel_near(removed, replayed, 0.02)) << removed << " vs " << replayed;
+  // The tool followed the path: the recorded path ends where the replayed one does.
+  const auto recorded = drill::ScriptedTrajectory::load_csv(dir / "recorded.csv");
+  EXPECT_TRUE(test::near((recorded.poses().back().position_mm - Vec3(10, 8, 5)).norm(), 0.0, 1e-9));
+  EXPECT_GE(recorded.duration(), 1.35);
+  // The window shows the drilled block.
+  const test::Png png = test::read_png(dir / "shots" / "replay.png");
+  ASSERT_EQ(png.w, kWidth);
+  const view::PixelRect views{340, 0, 620, 640};
+  EXPECT_GT(count(png, views, [](int red, int green, int blue) { return red > 100 && red >= green && green > blue + 10 && red - blue < 90; }), 20000);
+}
+
+TEST_F(ViewWindow, TurnedToolWithAShaftRecordsItsOrientationAndReplaysInIdoDrill) {
+  ASSERT_EQ(test::run_tool(fmt::format("tetmesh --shape block:16,16,8 -o {} -q", (dir / "block.vtu").string())).exit_code, 0);
+  // Drill workspace (f4); tilt the tool's axis (its shaft, radius 1 mm) by 3 × 15° (k); start
+  // (d), drag the burr down into the block over 20 frames, stop (d), wait for the drain.
+  nlohmann::json events = nlohmann::json::array({key(1, "key_down", "f4", false), key(2, "key_up", "f4", false)});
+  for (int i = 0; i < 3; ++i) {
+    events.push_back(key(3 + 2 * i, "key_down", "k", false));
+    events.push_back(key(4 + 2 * i, "key_up", "k", false));
+  }
+  for (const auto& e : {key(10, "key_down", "d", false), key(11, "key_up", "d", false), mouse(12, "mouse_down", 650, 320)})
+    events.push_back(e);
+  double y = 320;
+  for (int f = 13; f < 33; ++f) events.push_back(mouse(f, "mouse_move", 650, y += 9));
+  for (const auto& e : {mouse(33, "mouse_up", 650, y), key(36, "key_down", "d", false), key(37, "key_up", "d", false),
+                        wait(38, "idle"), event(39, "quit")})
+    events.push_back(e);
+  write_script(dir / "turned.json", events);
+  const auto r = run_view(fmt::format("{} --script {} --shaft-radius 1 --drill-path {} --drill-report {}",
+                                      (dir / "block.vtu").string(), (dir / "turned.json").string(),
+                                      (dir / "path.csv").string(), (dir / "view_drill.json").string()),
+                          dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json view_report = read_json(dir / "view_drill.json");
+  EXPECT_EQ(view_report["shaft_radius_mm"].get<double>(), 1.0);
+  const double removed = view_report["removed_volume_mm3"].get<double>();
+  EXPECT_GT(removed, 10.0);
+  // The path has the orientation: the axis tilted 45° from +z towards +x.
+  EXPECT_EQ(slurp(dir / "path.csv").substr(0, 20), "t,x,y,z,qx,qy,qz,qw\n");
+  const auto path = drill::ScriptedTrajectory::load_csv(dir / "path.csv");
+  const Vec3 axis = path.poses().back().orientation * Vec3::UnitZ();
+  EXPECT_TRUE(test::near((axis - Vec3(std::sqrt(0.5), 0, std::sqrt(0.5))).norm(), 0.0, 1e-12)) << axis.transpose();
+  // `ido drill` with the same tool replays it to the same removed volume.
+  const auto cli = test::run_tool(fmt::format("drill {} --tool sphere:radius=2,shaft=1 --path {} -o {} --report {} -q",
+                                              (dir / "block.vtu").string(), (dir / "path.csv").string(),
+                                              (dir / "out.vtu").string(), (dir / "cli_drill.json").string()));
+  ASSERT_EQ(cli.exit_code, 0) << cli.err;
+  const double replayed = read_json(dir / "cli_drill.json")["removed_volume_mm3"].get<double>();
+  EXPECT_TRUE(test::rel_near(removed, replayed, 0.02)) << removed << " vs " << replayed;
+}
+
+/// A UDP socket on 127.0.0.1 for the test's device: sends pose packets to @p port, receives forces.
+class TestDevice {
+ public:
+  explicit TestDevice(std::uint16_t port) {
+    m_socket = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+    timeval tv{0, 1000};  // 1 ms: receiving paces the sending
+    ::setsockopt(m_socket, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof(tv));
+    m_to.sin_family = AF_INET;
+    m_to.sin_port = htons(port);
+    m_to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  }
+  ~TestDevice() { ::close(m_socket); }
+  TestDevice(const TestDevice&) = delete;
+  TestDevice& operator=(const TestDevice&) = delete;
+  /// Sends the pose; true when a force packet came back within 1 ms.
+  bool send(const Vec3& position_mm, bool end = false) {
+    drill::PosePacket p;
+    p.sequence = ++m_sequence;
+    p.flags = end ? 1U : 0U;
+    p.pose.position_mm = position_mm;
+    const auto bytes = drill::encode_pose(p);
+    (void)::sendto(m_socket, bytes.data(), bytes.size(), 0, reinterpret_cast<const sockaddr*>(&m_to), sizeof(m_to));
+    std::array<std::uint8_t, 256> buf{};
+    const ssize_t n = ::recv(m_socket, buf.data(), buf.size(), 0);
+    drill::ForcePacket f;
+    return n > 0 && drill::decode_force(buf.data(), std::size_t(n), f);
+  }
+
+ private:
+  int m_socket = -1;
+  sockaddr_in m_to{};
+  std::uint32_t m_sequence = 0;
+};
+
+/// A UDP port free on 127.0.0.1 now.
+std::uint16_t free_udp_port() {
+  const int s = ::socket(AF_INET, SOCK_DGRAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  (void)::bind(s, reinterpret_cast<const sockaddr*>(&a), sizeof(a));
+  socklen_t len = sizeof(a);
+  ::getsockname(s, reinterpret_cast<sockaddr*>(&a), &len);
+  ::close(s);
+  return ntohs(a.sin_port);
+}
+
+TEST_F(ViewWindow, DeviceOverTheUdpBridgeDrillsAndItsRecordedPathReplaysInIdoDrill) {
+  ASSERT_EQ(test::run_tool(fmt::format("tetmesh --shape block:16,16,8 -o {} -q", (dir / "block.vtu").string())).exit_code, 0);
+  const std::uint16_t port = free_udp_port();
+  // Drill workspace (f4), connect the device (u); the session ends with the device's last packet.
+  write_script(dir / "device.json", {key(1, "key_down", "f4", false), key(2, "key_up", "f4", false),
+                                     key(3, "key_down", "u", false), key(4, "key_up", "u", false), wait(5, "idle"),
+                                     event(6, "quit")});
+  test::CommandResult r;
+  std::thread window([&] {
+    r = run_view(fmt::format("{} --script {} --drill-udp {} --drill-path {} --drill-report {}", (dir / "block.vtu").string(),
+                             (dir / "device.json").string(), port, (dir / "recorded.csv").string(),
+                             (dir / "view_drill.json").string()),
+                 dir);
+  });
+  // The device: above the block until the bridge answers, then 3 mm into the block's top and
+  // 2 mm across over about a second, then the end-of-session packet.
+  TestDevice device(port);
+  const Vec3 hover(8, 8, 12);
+  bool answered = false;
+  for (auto t0 = std::chrono::steady_clock::now();
+       !answered && std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60);)
+    answered = device.send(hover);
+  const auto start = std::chrono::steady_clock::now();
+  Vec3 p = hover;
+  for (double t = 0; answered && t < 1.2;) {
+    t = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    p = t < 0.8 ? Vec3(8, 8, 12 - 7 * t / 0.8) : Vec3(8 + 2 * std::min(1.0, (t - 0.8) / 0.3), 8, 5);
+    (void)device.send(p);
+  }
+  (void)device.send(p, /*end=*/true);
+  window.join();
+  ASSERT_TRUE(answered) << "the bridge never sent a force back";
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json view_report = read_json(dir / "view_drill.json");
+  EXPECT_EQ(view_report["source"], fmt::format("udp:{}", port));
+  const double removed = view_report["removed_volume_mm3"].get<double>();
+  EXPECT_GT(removed, 20.0) << "the device took the burr 3 mm deep and 2 mm across";
+  // The tool followed the device: the recorded path starts at the hover pose and ends at the last.
+  const auto recorded = drill::ScriptedTrajectory::load_csv(dir / "recorded.csv");
+  EXPECT_TRUE(test::near((recorded.poses().front().position_mm - hover).norm(), 0.0, 1e-12));
+  EXPECT_TRUE(test::near((recorded.poses().back().position_mm - p).norm(), 0.0, 1e-12));
+  // Replayed by `ido drill`, the recorded session removes the same volume (the threads' sampling: 2 %).
+  const auto cli = test::run_tool(fmt::format("drill {} --tool sphere:radius=2 --path {} -o {} --report {} -q",
+                                              (dir / "block.vtu").string(), (dir / "recorded.csv").string(),
+                                              (dir / "out.vtu").string(), (dir / "cli_drill.json").string()));
+  ASSERT_EQ(cli.exit_code, 0) << cli.err;
+  const double replayed = read_json(dir / "cli_drill.json")["removed_volume_mm3"].get<double>();
+  EXPECT_TRUE(test::rel_near(removed, replayed, 0.02)) << removed << " vs " << replayed;
+}
+
 TEST_F(ViewWindow, BadInputIsExitTwoAndNoDisplayIsExitOne) {
   auto r = run_view(fmt::format("{} --script {}", ct_path.string(), (dir / "missing.json").string()), dir);
   EXPECT_EQ(r.exit_code, 2);
@@ -444,6 +801,15 @@ TEST_F(ViewWindow, BadInputIsExitTwoAndNoDisplayIsExitOne) {
   EXPECT_NE(r.err.find("--seed-voxel 99,0,0"), std::string::npos) << r.err;
   r = run_view(fmt::format("{} --surface {} --frames 1", ct_path.string(), (dir / "s.txt").string()), dir);
   EXPECT_EQ(r.exit_code, 2);
+  r = run_view(fmt::format("{} --stop-voxel 0,0,99 --frames 1", ct_path.string()), dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--stop-voxel 0,0,99"), std::string::npos) << r.err;
+  r = run_view(fmt::format("{} --drill-replay {} --frames 1", ct_path.string(), (dir / "no-path.csv").string()), dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("no-path.csv"), std::string::npos) << r.err;
+  r = run_view(fmt::format("{} --shaft-radius 2 --frames 1", ct_path.string()), dir);  // not thinner than the burr
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--shaft-radius"), std::string::npos) << r.err;
   // Without a display the window cannot open: one line saying so, exit 1.
   const int status = std::system(fmt::format("env -u DISPLAY -u WAYLAND_DISPLAY {} view {} --frames 1 >{} 2>&1",
                                              test::tool_path().string(), ct_path.string(),

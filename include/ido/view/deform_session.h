@@ -3,6 +3,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <thread>
@@ -21,6 +22,23 @@ struct EnergySample {
   double step_ms = 0.0;                                        ///< wall time of the step (ms)
 };
 
+/// A number of the scene file that can be changed between two steps: a body's material
+/// (Young's modulus, Poisson ratio, density), the numbers its model's own settings give
+/// (`mass_spring`, `shape_matching`, `mls`: those the file sets) and the Rayleigh damping
+/// (docs/scene.md).
+struct SceneParameter {
+  std::string pointer;  ///< JSON pointer into the scene file, e.g. "/bodies/0/material/youngs_modulus_pa"
+  std::string label;    ///< what the panel shows, e.g. "beam: Young's modulus (Pa)"
+  double value = 0.0;   ///< the file's value (0 for a damping coefficient it leaves out)
+};
+
+/// One change of a scene parameter.
+struct ParameterChange {
+  std::int64_t step = 0;  ///< the steps taken before it: step `step + 1` is the first with the new value
+  std::string pointer;    ///< SceneParameter::pointer
+  double value = 0.0;     ///< the new value
+};
+
 /// What the render thread sees of a scene: an immutable picture after some step.
 struct DeformState {
   std::int64_t steps = 0;
@@ -35,6 +53,12 @@ struct DeformState {
   std::vector<EnergySample> history;  ///< the last samples (at most kHistory), oldest first
   double grab_stiffness_n_per_mm = 0.0;  ///< the pull spring's stiffness in use (after the stability cap)
   std::string error;                  ///< set when the run stopped (diverged)
+  /// The values of DeformSession::parameters() in use, in that order.
+  std::vector<double> parameters;
+  /// Every parameter change applied so far, oldest first.
+  std::vector<ParameterChange> changes;
+  /// Why the last change asked for was refused (the scene reader's message), else empty.
+  std::string parameter_error;
   static constexpr std::size_t kHistory = 600;
 };
 
@@ -55,8 +79,13 @@ struct GrabSpring {
 /// atomics and triple buffers; states come back through a triple buffer. No lock either way.
 class DeformSession {
  public:
-  /// Takes the scene over. @throws ido::InvalidInput for a scene without bodies.
+  /// Takes the scene over; its parameters cannot be changed (parameters() is empty).
+  /// @throws ido::InvalidInput for a scene without bodies.
   explicit DeformSession(io::Scene scene);
+  /// Reads the scene file @p scene_file (io::load_scene) and keeps its text, so that its
+  /// parameters can be changed between steps (set_parameters()).
+  /// @throws as io::load_scene; ido::InvalidInput for a scene without bodies.
+  explicit DeformSession(const std::filesystem::path& scene_file);
   ~DeformSession();
   DeformSession(const DeformSession&) = delete;
   DeformSession& operator=(const DeformSession&) = delete;
@@ -67,6 +96,17 @@ class DeformSession {
   /// Switches to integrator @p name before the next step (a name of integrators()).
   void set_integrator(const std::string& name);
   void set_grab(const GrabSpring& grab) { m_grab.write(grab); }
+  /// The scene's changeable parameters (empty for a session made from an io::Scene).
+  [[nodiscard]] const std::vector<SceneParameter>& parameters() const { return m_parameters; }
+  /// Asks for @p values (one per parameters(), in order) from the next step on. The worker
+  /// applies them between two steps (at once while paused) through the library: the scene file
+  /// with these values is read again by io::parse_scene — which checks them, naming the JSON
+  /// pointer of a bad one (DeformState::parameter_error; the run goes on unchanged) — and its
+  /// world takes over the particles' positions and velocities, the integrator and the step
+  /// count and time. So a run continued this way is a library run with the new values from that
+  /// step on (the integrator's warm start and the models' cached rotations start afresh).
+  /// @throws ido::InvalidInput for a wrong number of values.
+  void set_parameters(const std::vector<double>& values);
   [[nodiscard]] const std::vector<std::string>& integrators() const { return m_integrator_names; }
   /// The scene's bodies (rest meshes and particle ranges); their particles are in DeformState.
   [[nodiscard]] const std::vector<io::SceneBody>& bodies() const { return m_bodies; }
@@ -80,7 +120,17 @@ class DeformSession {
   void work();
   [[nodiscard]] std::vector<std::int32_t> grab_group(std::int32_t particle) const;
 
+  /// Worker: replaces the world when @p values differ from @p in_use (true when it did).
+  bool apply_parameters(const std::vector<double>& values, std::vector<double>& in_use,
+                        std::vector<ParameterChange>& changes, std::string& error);
+
   io::Scene m_scene;  // the worker's alone once started
+  std::string m_scene_text;              // the scene file (empty: parameters cannot change)
+  std::filesystem::path m_base_dir;      // where its mesh paths are resolved
+  std::vector<SceneParameter> m_parameters;
+  drill::TripleBuffer<std::shared_ptr<const std::vector<double>>> m_parameter_requests;
+  std::int64_t m_step_base = 0;  // steps and time of the worlds replaced by parameter changes
+  double m_time_base_s = 0.0;
   std::vector<io::SceneBody> m_bodies;
   std::vector<std::string> m_integrator_names;
   double m_dt_s = 0.0;

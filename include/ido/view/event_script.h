@@ -11,7 +11,7 @@ namespace ido::view {
 /// What an input event of the workbench does.
 enum class EventKind {
   MouseMove,   ///< the cursor moves to (x_px, y_px)
-  MouseDown,   ///< a button is pressed at (x_px, y_px)
+  MouseDown,   ///< a button is pressed at (x_px, y_px) (ctrl / shift / alt held)
   MouseUp,     ///< a button is released at (x_px, y_px)
   Scroll,      ///< the wheel turns by scroll_y notches (positive: away from the user) at (x_px, y_px)
   KeyDown,     ///< a key is pressed (key, ctrl / shift / alt held)
@@ -34,7 +34,7 @@ struct InputEvent {
   int button = 0;                 ///< 0 left, 1 right, 2 middle
   double scroll_y = 0.0;          ///< wheel notches (Scroll)
   std::string key;                ///< key name (KeyDown / KeyUp): "a".."z", "0".."9", "space", "enter", ...
-  bool ctrl = false, shift = false, alt = false;  ///< modifiers held (key events)
+  bool ctrl = false, shift = false, alt = false;  ///< modifiers held (key and button events)
   std::uint32_t codepoint = 0;    ///< Char
   std::string name;               ///< Screenshot: file name inside the screenshot folder
   std::string until;              ///< Wait: "idle" (no work running), "segment_done" or "deform_steps"

@@ -5,10 +5,9 @@
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 #include "ido/core/math.h"
 #include "ido/image/volume.h"
+#include "ido/io/report_json.h"
 #include "ido/segment/balloon.h"
 #include "ido/segment/organ.h"
 
@@ -33,11 +32,12 @@ struct SegmentRequest {
 /// a volume file). @throws ido::InvalidInput naming the path and the problem.
 void check_segment_outputs(const SegmentOutputs& outputs);
 
-/// The segmentation report for @p result ("surface" and "mask" name @p outputs): the one
-/// builder of the document `ido segment --report` writes (which adds its calcification and
-/// snapshot keys) and the workbench saves.
-[[nodiscard]] nlohmann::json segment_report_json(const SegmentRequest& request, const segment::BalloonResult& result,
-                                                 const SegmentOutputs& outputs);
+/// The segmentation report for @p result ("surface" and "mask" name @p outputs): the request
+/// (input, seeds, organ, options, stop points) and io::to_json of the balloon's report; the
+/// document `ido segment --report` writes (which adds its calcification and snapshot keys) and
+/// the workbench saves. Keys: docs/reports.md.
+[[nodiscard]] io::Json segment_report_json(const SegmentRequest& request, const segment::BalloonResult& result,
+                                           const SegmentOutputs& outputs);
 
 /// Writes the surface (io::write_triangle_mesh), the mask (segment::surface_to_mask on
 /// @p ct's grid) and the report, each atomically; the ones with an empty path are skipped.

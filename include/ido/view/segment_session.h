@@ -37,6 +37,8 @@ struct SegmentState {
   std::int64_t steps = 0;         ///< Balloon::step() calls so far
   geometry::TriangleMesh surface; ///< the balloon's surface now (mm)
   std::vector<Vec3> seeds_mm;     ///< the run's seeds
+  /// The options the run was started with (its stop points are options.leak.stop_points_mm).
+  segment::BalloonOptions options;
   /// The finished segmentation (stage Done): exactly what segment::segment_balloon returns for
   /// the same volume, seeds and options.
   std::shared_ptr<const segment::BalloonResult> result;

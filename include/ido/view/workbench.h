@@ -24,16 +24,44 @@ struct WorkbenchOptions {
   int height_px = 800;
   segment::Organ organ = segment::Organ::Generic;  ///< the Segment workspace's first organ choice
   std::vector<Index3> seed_voxels;    ///< seeds placed at start (voxel indices of the CT)
+  /// Stop points placed at start (voxel indices of the CT): the balloon's front does not pass
+  /// them (segment::LeakControlOptions::stop_points_mm).
+  std::vector<Index3> stop_voxels;
   SegmentOutputs segment_outputs;     ///< where Save (ctrl+s) in the Segment workspace writes the segmentation
   std::filesystem::path tet_output;   ///< where Save (ctrl+s) in the Mesh workspace writes the tetrahedra (.vtu .msh .node)
   double tet_edge_mm = 0.0;           ///< the Mesh workspace's first lattice spacing (mm); 0 = the surface's mean edge
   double burr_radius_mm = 2.0;        ///< the Drill workspace's spherical burr (mm)
+  /// The tool's shaft (mm; 0 = none, else below the burr radius), along the tool's axis from the
+  /// burr centre for 30 mm (drill::ToolOptions), turned with the tool's orientation.
+  double shaft_radius_mm = 0.0;
   double drill_max_s = 60.0;          ///< longest drilling session (s)
   std::filesystem::path drill_path;   ///< where a drilling session's path is written when it ends (CSV for `ido drill --path`)
   std::filesystem::path drill_report; ///< where its figures are written when it ends (JSON)
+  /// A path CSV (`ido drill --path`'s format) the Drill workspace replays (`p`); checked at start.
+  std::filesystem::path drill_replay;
+  /// UDP port (127.0.0.1) on which the Drill workspace's device bridge listens (`u`); 0 = any free port.
+  int drill_udp_port = 0;
   /// Deform workspace: written on exit, the grabbed particle's positions over the run (JSON).
   std::filesystem::path deform_log;
   bool quiet = false;                 ///< no messages on stdout
+};
+
+/// The workbench's workspaces.
+enum class Workspace : std::uint8_t { Segment, Scene, Mesh, Drill, Deform };
+
+/// "segment", "scene", "mesh", "drill" or "deform".
+[[nodiscard]] const char* workspace_name(Workspace workspace) noexcept;
+
+/// One frame of a workbench run.
+struct FrameRecord {
+  Workspace workspace = Workspace::Scene;  ///< the workspace shown
+  float ms = 0.0f;             ///< wall time of the frame loop's iteration (ms): input, panel, drawing, swap
+  bool script_waiting = false; ///< a script's wait held the frame (the loop then also sleeps 10 ms)
+};
+
+/// What a workbench run measured.
+struct WorkbenchStats {
+  std::vector<FrameRecord> frames;  ///< every frame, in order
 };
 
 /// Runs the interactive workbench (GLFW window, OpenGL 3.3 core, Dear ImGui) until the window
@@ -41,6 +69,6 @@ struct WorkbenchOptions {
 /// (SegmentSession); the frame loop never waits for it. See docs/viewer.md.
 /// @throws ido::InvalidInput for unreadable options or files (naming them); ido::IoError as the
 /// readers; ido::Error when no window can be opened (no display) or a scripted wait times out.
-void run_workbench(const WorkbenchOptions& options);
+WorkbenchStats run_workbench(const WorkbenchOptions& options);
 
 }  // namespace ido::view
