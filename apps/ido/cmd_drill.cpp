@@ -73,6 +73,22 @@ std::size_t peak_rss_bytes() {
   return static_cast<std::size_t>(u.ru_maxrss) * 1024U;  // KiB on Linux
 }
 
+// Returns the heap's freed memory to the system (glibc; elsewhere nothing to do).
+void trim_heap() {
+#if defined(__GLIBC__)
+  ::malloc_trim(0);
+#endif
+}
+
+// Bytes held by a mesh's arrays (capacities): its vertices, its cells @p cells and its fields.
+template <class Mesh, class Cells>
+std::size_t mesh_bytes(const Mesh& mesh, const Cells& cells) {
+  std::size_t n = mesh.vertices.capacity() * sizeof(Vec3) + cells.capacity() * sizeof(cells[0]);
+  for (const auto* fields : {&mesh.point_fields, &mesh.cell_fields})
+    for (const auto& [name, f] : *fields) n += f.values.capacity() * sizeof(double);
+  return n;
+}
+
 // The smallest leaf size the hierarchy can reach on @p hierarchy's largest root (mm), and
 // the refinement depth @p min_size_mm implies there.
 void check_min_size(const drill::TetHierarchy& hierarchy, double min_size_mm) {
@@ -154,10 +170,10 @@ void run(const DrillOptions& o, const GlobalOptions& g) {
   // The simulator (its v_lists and the render copy) is gone before the outputs are made.
   std::vector<std::pair<double, std::vector<std::vector<drill::SurfaceFace>>>> shots;
   std::vector<std::vector<drill::SurfaceFace>> lists;
-  geometry::TriangleMesh surface;
   nlohmann::json r;
   drill::SessionMemory mem;
   drill::SessionStats st;
+  std::size_t session_peak = 0;
   {
     drill::Simulator sim(hierarchy, device, so);
     // The render consumer hands over copies of its v_lists at the picture times; they are
@@ -171,22 +187,33 @@ void run(const DrillOptions& o, const GlobalOptions& g) {
       // A safety net only: the session ends at the path's end plus at most the drain limit.
       sim.run(device.duration() + so.drain_limit_s + 30.0, progress.get());
     }
+    session_peak = peak_rss_bytes();  // the drilling alone, before any output is made
     mem = sim.memory_use();
     if (!o.report.empty()) r = drill_session_json(hierarchy, sim, so, before);
     st = sim.stats();
     lists = sim.take_render_v_lists();
   }
-#if defined(__GLIBC__)
-  // The session's freed memory back to the system before the outputs are made: ido's heap
-  // policy keeps freed memory (ido/core/memory.h), and blocks above 32 MiB are mapped afresh,
-  // so the surface and the leaf mesh would come on top of it (depth 7 on the benchmark trace:
-  // process peak 319 -> 252 MiB, docs/drilling.md).
-  ::malloc_trim(0);
-#endif
-  surface = drill::assemble_surface(std::move(lists), hierarchy.vertices());
-  const std::size_t session_peak = peak_rss_bytes();  // before the outputs are made
-  io::write_tet_mesh(output_tmp, drill::full_leaf_mesh(hierarchy));
-  if (!o.surface.empty()) io::write_triangle_mesh(surface_tmp, surface);
+  // The outputs one at a time, each freed before the next is made: the surface (assembled
+  // from the v_lists taken over, which it frees root by root), then the leaf mesh. Between
+  // them the freed memory goes back to the system: ido's heap policy keeps freed memory
+  // (ido/core/memory.h), and blocks above 32 MiB are mapped afresh, so the next output would
+  // come on top of it (docs/drilling.md, "Session end and memory").
+  trim_heap();
+  std::size_t surface_triangles = 0, surface_bytes = 0, leaf_bytes = 0;
+  if (!o.surface.empty() || !o.report.empty()) {
+    const auto surface = drill::assemble_surface(std::move(lists), hierarchy.vertices());
+    surface_triangles = surface.triangles.size();
+    surface_bytes = mesh_bytes(surface, surface.triangles);
+    if (!o.surface.empty()) io::write_triangle_mesh(surface_tmp, surface);
+  }
+  lists = {};
+  trim_heap();
+  {
+    const auto leaves = drill::full_leaf_mesh(hierarchy);
+    leaf_bytes = mesh_bytes(leaves, leaves.tets);
+    io::write_tet_mesh(output_tmp, leaves);
+  }
+  trim_heap();
   if (writer) {
     // The camera is fixed by the first picture (the intact mesh) and kept for the rest.
     for (const auto& shot : shots) {
@@ -200,14 +227,16 @@ void run(const DrillOptions& o, const GlobalOptions& g) {
   const std::size_t peak = peak_rss_bytes();
   if (!o.report.empty()) {
     r["mesh"] = o.mesh;
-    r["surface_triangles"] = surface.triangles.size();
+    r["surface_triangles"] = surface_triangles;
     r["memory"] = {{"peak_rss_bytes", peak},
                    {"session_peak_rss_bytes", session_peak},
                    {"nodes_bytes", mem.nodes},
                    {"v_lists_bytes", mem.v_lists},
                    {"hash_bytes", mem.hash},
                    {"buffers_bytes", mem.buffers + force_record},
-                   {"other_bytes", peak > mem.total() + force_record ? peak - mem.total() - force_record : 0}};
+                   {"other_bytes", peak > mem.total() + force_record ? peak - mem.total() - force_record : 0},
+                   {"surface_mesh_bytes", surface_bytes},
+                   {"leaf_mesh_bytes", leaf_bytes}};
     if (!o.snapshots.empty()) {
       r["snapshots"] = writer->files_json();
       r["snapshot_period_s"] = o.snapshot_every_s;

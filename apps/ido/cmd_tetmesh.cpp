@@ -4,9 +4,13 @@
 // isosurface stuffing), or writes one of the drilling issue's test shapes
 // (`--shape cube|cube12|block:SX,SY,SZ[,CELL]`). Prints a quality summary; --report writes
 // the same figures as JSON. Every check happens before the first file is written.
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <optional>
+#include <string_view>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -15,8 +19,10 @@
 #include "command.h"
 #include "ido/core/error.h"
 #include "ido/drill/shapes.h"
+#include "ido/geometry/aabb.h"
 #include "ido/geometry/mesh_checks.h"
 #include "ido/geometry/tet_quality.h"
+#include "ido/io/memory_budget.h"
 #include "ido/io/mesh_io.h"
 #include "ido/io/volume_io.h"
 #include "ido/meshing/distance_field.h"
@@ -120,6 +126,56 @@ geometry::TetMesh mesh_mask(const TetmeshOptions& o, const image::Volume<float>&
   return meshing::tetrahedralize(meshing::signed_distance_from_mask(mask), to, progress);
 }
 
+// Refuses an --edge whose lattice would not fit the memory budget (ido --memory-limit),
+// before anything of it is allocated. Isosurface stuffing samples the input on a
+// body-centred cubic lattice of spacing h over the input's box (its corners and cell centres:
+// at least 2 · Π floor(extent / h) vertices, each with a double value and a sign byte), and a
+// surface is first made a distance grid of h/2 voxels (4-byte floats, at least
+// Π floor(extent / (h/2)) of them). Counted from the box alone (the mesher's margins only
+// add), so an edge that fits is never refused.
+void check_lattice_budget(const TetmeshOptions& o, const geometry::Aabb& box, bool surface) {
+  if (!o.edge_mm) return;
+  const double h = *o.edge_mm;
+  const Vec3 extent = box.max - box.min;
+  auto cells = [&](double step) {
+    std::array<std::uint64_t, 3> n{};
+    for (int a = 0; a < 3; ++a) {
+      const double c = std::max(1.0, std::floor(extent[a] / step));
+      n[static_cast<std::size_t>(a)] = c >= 1e18 ? std::uint64_t(1e18) : static_cast<std::uint64_t>(c);
+    }
+    return n;
+  };
+  const auto n = cells(h);
+  const std::uint64_t vertices = io::saturating_product({2, n[0], n[1], n[2]});
+  std::uint64_t bytes = io::saturating_product({vertices, sizeof(double) + sizeof(std::int8_t)});
+  if (surface) {
+    const auto g = cells(0.5 * h);
+    const std::uint64_t grid = io::saturating_product({g[0], g[1], g[2], sizeof(float)});
+    bytes = grid > UINT64_MAX - bytes ? UINT64_MAX : bytes + grid;
+  }
+  if (bytes > io::memory_limit_bytes())
+    throw InvalidInput(fmt::format("--edge {:g}: the meshing lattice over {} ({:.3g} x {:.3g} x {:.3g} mm) has at "
+                                   "least {:.3g} vertices and needs {}, over the memory limit of {} "
+                                   "(ido --memory-limit)",
+                                   h, o.input, extent.x(), extent.y(), extent.z(), static_cast<double>(vertices),
+                                   io::format_bytes(bytes), io::format_bytes(io::memory_limit_bytes())));
+}
+
+// Runs the mesher, saying in the CLI's words (naming --edge, not the library's edge_mm) when
+// it refuses the lattice spacing as too small: more lattice vertices than it accepts, though
+// within the memory budget.
+template <class Mesher>
+geometry::TetMesh run_mesher(const TetmeshOptions& o, Mesher&& mesher) {
+  try {
+    return mesher();
+  } catch (const InvalidInput& e) {
+    if (!o.edge_mm || std::string_view(e.what()).find("edge_mm is too small") == std::string_view::npos) throw;
+    throw InvalidInput(fmt::format("--edge {:g}: the lattice spacing is too small for {}: the meshing lattice "
+                                   "would have more vertices than the mesher accepts; give a larger --edge",
+                                   *o.edge_mm, o.input));
+  }
+}
+
 // The mesh the options ask for: a test shape, or INPUT meshed by isosurface stuffing.
 geometry::TetMesh mesh_from_options(const TetmeshOptions& o, Progress* progress) {
   if (!o.shape.empty() && !o.input.empty())
@@ -153,19 +209,21 @@ geometry::TetMesh mesh_from_options(const TetmeshOptions& o, Progress* progress)
           "{}: the surface is not closed ({} boundary edges, {} non-manifold edges)", o.input,
           check.boundary_edges, check.non_manifold_edges));
     }
-    mesh = meshing::tetrahedralize_surface(surface, to, progress);
+    check_lattice_budget(o, geometry::Aabb::of(surface.vertices), true);
+    mesh = run_mesher(o, [&] { return meshing::tetrahedralize_surface(surface, to, progress); });
   } else {
     const auto volume = io::read_volume(o.input);
     if (o.input_kind == "auto" && !o.field) kind = o.label ? InputKind::Mask : classify_volume(o.input, volume);
     if (kind == InputKind::Field && o.label)
       throw InvalidInput("--label applies to a mask (label map), not to a distance field");
+    check_lattice_budget(o, volume.world_bounds(), false);
     if (kind == InputKind::Mask) {
-      mesh = mesh_mask(o, volume, to, progress);
+      mesh = run_mesher(o, [&] { return mesh_mask(o, volume, to, progress); });
     } else {
       for (float x : volume.data()) {
         if (std::isnan(x)) throw InvalidInput(fmt::format("{}: the distance field holds NaN", o.input));
       }
-      mesh = meshing::tetrahedralize(volume, to, progress);
+      mesh = run_mesher(o, [&] { return meshing::tetrahedralize(volume, to, progress); });
     }
   }
   if (mesh.tets.empty()) {

@@ -68,13 +68,16 @@ inline void add_ms_counters(benchmark::State& state, const std::string& prefix, 
 /// OpenVDB voxel edge (mm) for @p depth: about the leaves' mean edge.
 inline double voxel_edge(int depth) { return leaf_edge(depth) / std::sqrt(3.0) * std::sqrt(2.0); }
 
-/// The block as a BoolGrid of voxel edge @p h_mm (voxels on, pruned to tiles).
+/// The block as a BoolGrid of voxel edge @p h_mm (voxels on, as tiles where they can be).
+/// Filled sparsely (Grid::fill: tiles where a whole node is covered), as an OpenVDB user
+/// would: denseFill made every leaf first and pruned them afterwards, the same tree in the
+/// end but a peak of 519 MiB at depth 8 for a 20 MiB grid.
 inline openvdb::BoolGrid::Ptr make_block_grid(double h_mm) {
   auto grid = openvdb::BoolGrid::create(false);
   grid->setTransform(openvdb::math::Transform::createLinearTransform(h_mm));
   const openvdb::Coord hi(static_cast<int>(kBlock.x() / h_mm) - 1, static_cast<int>(kBlock.y() / h_mm) - 1,
                           static_cast<int>(kBlock.z() / h_mm) - 1);
-  grid->denseFill(openvdb::CoordBBox(openvdb::Coord(0, 0, 0), hi), true, true);
+  grid->fill(openvdb::CoordBBox(openvdb::Coord(0, 0, 0), hi), true, true);
   grid->tree().prune();
   return grid;
 }

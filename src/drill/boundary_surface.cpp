@@ -463,8 +463,8 @@ Across virtual_child_across(const NodeRef& p, int s, int f, const std::array<Acr
   return a;
 }
 
-// Point keys of one root's barycentric keys: the root's vertex order sorted by mesh vertex
-// index is found once, so a key costs a pass over 4 coordinates (the same key as
+// A root's mesh vertex ids in increasing order and their root vertex slots, found once per
+// root, so a face costs a pass over its corners' 4 coordinates (the same keys as
 // point_key(), which sorts the (vertex, weight) pairs per call).
 struct RootKeys {
   std::array<std::int32_t, 4> id{};    // mesh vertex indices in increasing order
@@ -478,28 +478,17 @@ struct RootKeys {
       id[i] = t[o[i]];
     }
   }
-  // Precondition: @p k holds the (−1, 0) filler in every slot (a default PointKey, as
-  // emplace_back made it; filling it again here was a second 32-byte store per key).
-  // Without a branch per coordinate: every pair is written at the next free slot and the
-  // slot advances only for a non-zero weight, so a zero-weight pair is overwritten by the
-  // next kept one or, at the end, is (−1, 0) like the untouched slots after it.
-  void make(const BaryKey& key, PointKey& k) const noexcept {
-    std::size_t n = 0;
-    for (std::size_t i = 0; i < 4; ++i) {
-      const std::int32_t w = key[slot[i]];
-      k.id[n] = w != 0 ? id[i] : -1;
-      k.weight[n] = w;
-      n += w != 0 ? 1U : 0U;
-    }
-  }
 };
 
 // Appends the face of root barycentric keys a, b, c to out.
 void push_face(const RootKeys& rk, const BaryKey& a, const BaryKey& b, const BaryKey& c, std::vector<SurfaceFace>& out) {
-  SurfaceFace& f = out.emplace_back();  // default keys: the filler make() expects
-  rk.make(a, f[0]);
-  rk.make(b, f[1]);
-  rk.make(c, f[2]);
+  std::array<BaryKey, 3> w;  // the corners' weights in increasing vertex id order
+  for (std::size_t i = 0; i < 4; ++i) {
+    w[0][i] = a[rk.slot[i]];
+    w[1][i] = b[rk.slot[i]];
+    w[2][i] = c[rk.slot[i]];
+  }
+  out.emplace_back(rk.id, w);
 }
 
 // Emits the parts of face `b` (root barycentric keys in our root, outward from our side)
@@ -536,6 +525,35 @@ void emit_against(const TetHierarchy& h, const FaceMapTables& fm, const RootKeys
 }
 
 }  // namespace
+
+SurfaceFace::SurfaceFace(const std::array<std::int32_t, 4>& vertex_ids, const std::array<BaryKey, 3>& corner) noexcept
+    : m_vertex(vertex_ids) {
+  for (std::size_t c = 0; c < 3; ++c)
+    for (std::size_t i = 0; i < 3; ++i) {
+      const std::size_t e = 3 * c + i;
+      m_weight[e < 5 ? 0 : 1] |= static_cast<std::uint64_t>(corner[c][i] & 0xFFF) << (12 * (e < 5 ? e : e - 5));
+    }
+}
+
+PointKey SurfaceFace::key(std::size_t c) const noexcept {
+  std::array<std::int32_t, 4> w{};
+  for (std::size_t i = 0; i < 3; ++i) {
+    const std::size_t e = 3 * c + i;
+    w[i] = static_cast<std::int32_t>((m_weight[e < 5 ? 0 : 1] >> (12 * (e < 5 ? e : e - 5))) & 0xFFF);
+  }
+  w[3] = kBaryScale - w[0] - w[1] - w[2];
+  // Without a branch per coordinate: every pair is written at the next free slot and the
+  // slot advances only for a non-zero weight, so a zero-weight pair is overwritten by the
+  // next kept one or, at the end, is (−1, 0) like the untouched slots after it.
+  PointKey k;
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < 4; ++i) {
+    k.id[n] = w[i] != 0 ? m_vertex[i] : -1;
+    k.weight[n] = w[i];
+    n += w[i] != 0 ? 1U : 0U;
+  }
+  return k;
+}
 
 PointKey point_key(const TetHierarchy& hierarchy, std::size_t r, const BaryKey& key) noexcept {
   const Tet& t = hierarchy.root_tet(r);
@@ -703,6 +721,26 @@ const std::vector<std::vector<SurfaceFace>>& BoundarySurface::v_lists() const {
   for (const std::uint32_t r : m_stale_roots) (void)v_list(r);
   m_stale_roots.clear();
   return m_flat;
+}
+
+std::vector<std::vector<SurfaceFace>> BoundarySurface::take_v_lists() {
+  std::vector<std::vector<SurfaceFace>> out(m_chunks.size());
+  for (std::size_t r = 0; r < m_chunks.size(); ++r) {
+    if (!m_flat_stale[r] && !m_flat[r].empty()) {
+      out[r] = std::move(m_flat[r]);
+    } else {
+      std::size_t n = 0;
+      for (const auto& c : m_chunks[r]) n += c ? c->size() : 0;
+      out[r].reserve(n);
+      for (const auto& c : m_chunks[r])
+        if (c) out[r].insert(out[r].end(), c->begin(), c->end());
+    }
+    m_flat[r] = {};
+    m_flat_stale[r] = 0;
+    std::fill(m_chunks[r].begin(), m_chunks[r].end(), nullptr);
+  }
+  m_stale_roots.clear();
+  return out;
 }
 
 void BoundarySurface::rebuild_all(const TetHierarchy& hierarchy) {
@@ -1164,7 +1202,7 @@ geometry::TriangleMesh assemble(std::span<const std::vector<SurfaceFace>> v_list
   };
   for (const auto& list : v_lists)
     for (const auto& f : list)
-      for (const auto& k : f) vertex(k);
+      for (std::size_t e = 0; e < 3; ++e) vertex(f.key(e));
   auto& root_field = mesh.cell_fields["root"];
   std::vector<std::int32_t> ring;
   // Appends the vertices strictly inside edge (a, b) that are surface vertices, in order.
@@ -1179,7 +1217,8 @@ geometry::TriangleMesh assemble(std::span<const std::vector<SurfaceFace>> v_list
     self(self, m, b);
   };
   for (std::size_t r = 0; r < v_lists.size(); ++r) {
-    for (const auto& f : v_lists[r]) {
+    for (const auto& face : v_lists[r]) {
+      const std::array<PointKey, 3> f{face.key(0), face.key(1), face.key(2)};
       ring.clear();
       for (std::size_t e = 0; e < 3; ++e) {
         ring.push_back(index.at(f[e]));

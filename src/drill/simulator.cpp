@@ -173,19 +173,8 @@ void Simulator::stop() {
       root[c.chunk] = m_surface.shared_chunk(c.root, c.chunk);
     }
   }
-  // The render copy becomes render_v_lists(): each chunk is freed as it is appended, so the
-  // copy is never held twice (start() copies the chunks again from the surface).
-  m_render_lists.assign(m_render_chunks.size(), {});
-  for (std::size_t r = 0; r < m_render_chunks.size(); ++r) {
-    std::size_t n = 0;
-    for (const auto& c : m_render_chunks[r]) n += c ? c->size() : 0;
-    m_render_lists[r].reserve(n);
-    for (auto& c : m_render_chunks[r]) {
-      if (c) m_render_lists[r].insert(m_render_lists[r].end(), c->begin(), c->end());
-      c = nullptr;
-    }
-  }
-  m_render_chunks.clear();
+  // The render copy stays as chunk lists, shared with the surface, until render_v_lists() or
+  // take_render_v_lists() asks for it (flattening it here held every face twice).
   const std::size_t n = std::min(m_stats.haptic_ticks, m_tick_period.size());
   m_stats.haptic_period_s.assign(m_tick_period.begin() + (n > 0 ? 1 : 0), m_tick_period.begin() + static_cast<std::ptrdiff_t>(n));
   m_stats.force_compute_time_s.assign(m_tick_compute.begin(), m_tick_compute.begin() + static_cast<std::ptrdiff_t>(n));
@@ -376,6 +365,40 @@ void Simulator::collision_loop() {
     if (!m_pending.empty()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
   m_collision_exited.store(true, std::memory_order_release);
+}
+
+const std::vector<std::vector<SurfaceFace>>& Simulator::render_v_lists() const {
+  if (m_running || m_render_chunks.empty()) return m_render_lists;
+  // Each chunk is freed as it is appended, so the render copy is never held twice (start()
+  // takes the chunks again from the surface).
+  m_render_lists.assign(m_render_chunks.size(), {});
+  for (std::size_t r = 0; r < m_render_chunks.size(); ++r) {
+    std::size_t n = 0;
+    for (const auto& c : m_render_chunks[r]) n += c ? c->size() : 0;
+    m_render_lists[r].reserve(n);
+    for (auto& c : m_render_chunks[r]) {
+      if (c) m_render_lists[r].insert(m_render_lists[r].end(), c->begin(), c->end());
+      c = nullptr;
+    }
+  }
+  m_render_chunks.clear();
+  return m_render_lists;
+}
+
+std::vector<std::vector<SurfaceFace>> Simulator::take_render_v_lists() {
+  if (m_running) return {};
+  bool shared = !m_render_chunks.empty() && m_render_chunks.size() == m_surface.root_count();
+  for (std::size_t r = 0; r < m_render_chunks.size() && shared; ++r) {
+    shared = m_render_chunks[r].size() <= m_surface.chunk_count(r);
+    for (std::size_t c = 0; c < m_surface.chunk_count(r) && shared; ++c)
+      shared = (c < m_render_chunks[r].size() ? m_render_chunks[r][c] : nullptr) == m_surface.shared_chunk(r, c);
+  }
+  if (shared) {
+    m_render_chunks.clear();  // the surface then holds the only reference to each list
+    return m_surface.take_v_lists();
+  }
+  (void)render_v_lists();
+  return std::move(m_render_lists);
 }
 
 void Simulator::take_surface_snapshots(bool final) {

@@ -17,6 +17,8 @@
 #include <random>
 #include <set>
 #include <sstream>
+#include <string>
+#include <tuple>
 
 #include <nlohmann/json.hpp>
 
@@ -378,6 +380,32 @@ TEST(CliBadInput, OptionDeclaredSizesAreCheckedAgainstTheMemoryLimit) {
   expect_refused(run_measured("--memory-limit 64M render " + q(ct) + " -o " + q(dir / "p.png") + " --size 16384x16384"),
                  "--size 16384x16384", "a picture of 16384 x 16384 pixels needs 3 GiB, over the memory limit of 64 MiB");
   EXPECT_EQ(names_in(dir), std::set<std::string>{"ct.nii.gz"});
+}
+
+// ido tetmesh --edge: the lattice it declares is checked against the memory budget before it
+// is allocated, and a spacing the mesher refuses is named as the option (--edge), not as the
+// library's edge_mm. On the 47-mm sphere mask under a 16 MiB limit, 0.25 mm (at least 1.3e7
+// lattice vertices, 114 MiB) is refused and 2 mm (2.1e4) is meshed.
+TEST(CliBadInput, TetmeshEdgeIsNamedAndCheckedAgainstTheMemoryLimit) {
+  const auto dir = test::scratch_dir("bad-cli-tetmesh-edge");
+  const auto labels = dir / "labels.nii.gz";
+  ASSERT_EQ(run_measured("phantom sphere -o " + q(dir / "ct.nii.gz") + " --labels " + q(labels)).exit_code, 0);
+  const auto out = dir / "mesh.vtu";
+  const auto tetmesh = [&](const std::string& global, const std::string& edge) {
+    return run_measured(global + "tetmesh " + q(labels) + " -o " + q(out) + " --edge " + edge);
+  };
+  for (const auto& [global, edge, fragment] :
+       {std::tuple<std::string, std::string, std::string>{"", "0.001", "needs 1.66 PiB, over the memory limit"},
+        {"--memory-limit 16M ", "0.25", "needs 114 MiB, over the memory limit of 16 MiB"},
+        {"", "0.05", "the lattice spacing is too small"}}) {
+    SCOPED_TRACE(edge);
+    const auto r = tetmesh(global, edge);
+    expect_refused(r, "--edge " + edge, fragment);
+    EXPECT_EQ(r.err.find("edge_mm"), std::string::npos) << r.err;
+  }
+  EXPECT_EQ(names_in(dir), (std::set<std::string>{"ct.nii.gz", "labels.nii.gz"}));
+  EXPECT_EQ(tetmesh("--memory-limit 16M ", "2").exit_code, 0);
+  EXPECT_TRUE(fs::exists(out));
 }
 
 }  // namespace

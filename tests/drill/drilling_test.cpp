@@ -161,6 +161,44 @@ TEST(Force, SlidingAlongAFlatFaceHasNoSteps) {
 
 double leaf_volume(const TetHierarchy& h) { return h.material_volume(); }
 
+// The 32-byte face record gives back each corner's global key exactly: random barycentric
+// keys of every weight from 0 to kBaryScale (corners, edges, faces and the inside of a root),
+// packed with the root's vertex ids in increasing order as the v_list walk packs them, read
+// back equal to point_key().
+TEST(BoundarySurface, FaceRecordKeysArePointKeys) {
+  TetHierarchy h(make_block({8, 8, 4}, 2.0));
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> root(0, static_cast<int>(h.root_count()) - 1), weight(0, kBaryScale), zero(0, 3);
+  auto random_key = [&] {
+    BaryKey k{};
+    // Three cut points in [0, kBaryScale], some entries forced to 0 (points on faces, edges, corners).
+    std::array<int, 3> cut{weight(rng), weight(rng), weight(rng)};
+    std::sort(cut.begin(), cut.end());
+    k = {cut[0], cut[1] - cut[0], cut[2] - cut[1], kBaryScale - cut[2]};
+    for (int z = zero(rng); z > 0; --z) {
+      const auto i = static_cast<std::size_t>(zero(rng));
+      k[(i + 1) % 4] += k[i];
+      k[i] = 0;
+    }
+    return k;
+  };
+  for (int trial = 0; trial < 20000; ++trial) {
+    const auto r = static_cast<std::size_t>(root(rng));
+    const std::array<BaryKey, 3> corner{random_key(), random_key(), random_key()};
+    const Tet& t = h.root_tet(r);
+    std::array<std::size_t, 4> order{0, 1, 2, 3};
+    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return t[a] < t[b]; });
+    std::array<std::int32_t, 4> ids{};
+    std::array<BaryKey, 3> sorted{};
+    for (std::size_t i = 0; i < 4; ++i) {
+      ids[i] = t[order[i]];
+      for (std::size_t c = 0; c < 3; ++c) sorted[c][i] = corner[c][order[i]];
+    }
+    const SurfaceFace f(ids, sorted);
+    for (std::size_t c = 0; c < 3; ++c) ASSERT_EQ(f.key(c), point_key(h, r, corner[c])) << "trial " << trial << " corner " << c;
+  }
+}
+
 TEST(BoundarySurface, IntactBlockSurfaceIsItsBox) {
   TetHierarchy h(make_cube12(10.0));
   BoundarySurface s(h);
@@ -290,7 +328,7 @@ TEST(BoundarySurface, VListsEqualAPointLocationReference) {
       if (step % 3 != 2) continue;
       for (std::size_t r = 0; r < h.root_count(); ++r) {
         std::vector<FaceKeys> mine;
-        for (const auto& f : surface.v_list(r)) mine.push_back(canonical(f));
+        for (const auto& f : surface.v_list(r)) mine.push_back(canonical({f.key(0), f.key(1), f.key(2)}));
         std::sort(mine.begin(), mine.end(), face_less);
         const auto ref = reference_v_list(h, r);
         ASSERT_EQ(mine.size(), ref.size()) << "trial " << trial << " step " << step << " root " << r;

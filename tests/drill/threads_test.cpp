@@ -96,11 +96,14 @@ TEST(Simulator, TimingPercentilesFollowIdosOnePercentile) {
   EXPECT_EQ(none.max, 0.0);
 }
 
+// Taken (take_render_v_lists, as ido drill does) rather than viewed, the render copy is the
+// same lists, and afterwards the session holds none of its faces (they are not copied).
 TEST(Simulator, ScriptedSessionDrillsAndRenderCopyMatches) {
-  for (const int threads : {1, 2}) {
+  for (const auto& [threads, take] : {std::pair{1, false}, std::pair{2, false}, std::pair{1, true}, std::pair{2, true}}) {
     TetHierarchy h(make_block({12, 12, 12}, 3.0));
     auto device = plunge(0.4);
     SCOPED_TRACE(threads);
+    SCOPED_TRACE(take ? "taken" : "viewed");
     SimulatorOptions o;
     o.surface.threads = threads;  // serial, and two v_list workers on the collision thread
     o.tool.burr_radius_mm = 2.0;
@@ -115,13 +118,25 @@ TEST(Simulator, ScriptedSessionDrillsAndRenderCopyMatches) {
     EXPECT_TRUE(test::rel_near(before - h.material_volume(), st.removed_volume_mm3, 1e-9));
     EXPECT_GT(st.peak_force_n, 0.0);
     ASSERT_FALSE(device.forces().empty());
+    const auto fresh = BoundarySurface(h, {.chunk_level = o.surface.chunk_level, .threads = 1}).v_lists();
+    if (take) {
+      const std::size_t faces = sim.surface().face_count();
+      ASSERT_GT(faces, 0U);
+      const std::size_t held = sim.memory_use().v_lists;
+      const auto taken = sim.take_render_v_lists();
+      ASSERT_EQ(taken.size(), fresh.size());
+      for (std::size_t r = 0; r < fresh.size(); ++r) ASSERT_EQ(taken[r], fresh[r]) << "root " << r;
+      EXPECT_LE(sim.memory_use().v_lists + faces * sizeof(SurfaceFace), held);  // every face left the session
+      EXPECT_EQ(sim.surface().face_count(), 0U);
+      EXPECT_TRUE(sim.render_v_lists().empty());
+      continue;
+    }
     // The render consumer's copy equals the authoritative v_lists.
     const auto& mine = sim.render_v_lists();
     const auto& truth = sim.surface().v_lists();
     ASSERT_EQ(mine.size(), truth.size());
     for (std::size_t r = 0; r < truth.size(); ++r) ASSERT_EQ(mine[r], truth[r]) << "root " << r;
     // ... and the incremental lists equal a serial rebuild of the final tree from scratch.
-    const auto fresh = BoundarySurface(h, {.chunk_level = o.surface.chunk_level, .threads = 1}).v_lists();
     for (std::size_t r = 0; r < truth.size(); ++r) ASSERT_EQ(truth[r], fresh[r]) << "root " << r;
     EXPECT_GT(st.render_snapshots, 0U);
     // Nothing outside the swept region went: material left ≥ block − (swept volume bound).

@@ -28,8 +28,30 @@ struct PointKey {
 /// World position (mm) of a point key on the mesh vertices @p vertices_mm.
 [[nodiscard]] Vec3 point_position(const PointKey& key, std::span<const Vec3> vertices_mm) noexcept;
 
-/// A visible face, counter-clockwise seen from outside the material.
-using SurfaceFace = std::array<PointKey, 3>;
+/// A visible face, counter-clockwise seen from outside the material: the point keys of its
+/// three corners in 32 bytes (three PointKeys take 96). It holds the mesh vertex ids of its
+/// root in increasing order and, per corner, the weights on them (root barycentric keys in
+/// that order); 12 bits each, the fourth being kBaryScale less the other three, as in every
+/// BaryKey. A face is stored once per v_list entry, so this is most of a session's memory.
+class SurfaceFace {
+ public:
+  SurfaceFace() = default;
+  /// The face with corners @p corner (root barycentric keys whose entries are weights on
+  /// @p vertex_ids, each summing to kBaryScale) on the root's mesh vertex ids @p vertex_ids
+  /// (increasing).
+  SurfaceFace(const std::array<std::int32_t, 4>& vertex_ids, const std::array<BaryKey, 3>& corner) noexcept;
+  /// Global key of corner @p c (0–2): the (vertex, weight) pairs of non-zero weight, as
+  /// point_key() gives for the same point.
+  [[nodiscard]] PointKey key(std::size_t c) const noexcept;
+  friend bool operator==(const SurfaceFace&, const SurfaceFace&) = default;
+
+ private:
+  std::array<std::int32_t, 4> m_vertex{-1, -1, -1, -1};
+  // Weights 0–2 of corners 0–2 (9 values of 12 bits): value i of corner c is entry 3c + i,
+  // entries 0–4 in m_weight[0], 5–8 in m_weight[1], 12 bits apart.
+  std::array<std::uint64_t, 2> m_weight{0, 0};
+};
+static_assert(sizeof(SurfaceFace) == 32, "a v_list face record is 32 bytes");
 
 /// Options of BoundarySurface.
 struct BoundarySurfaceOptions {
@@ -103,6 +125,11 @@ class BoundarySurface {
   [[nodiscard]] const std::vector<SurfaceFace>& v_list(std::size_t r) const;
   /// Every root's v_list (valid until the next update).
   [[nodiscard]] const std::vector<std::vector<SurfaceFace>>& v_lists() const;
+  /// Moves every root's v_list out, freeing each root's chunk lists as its list is made (so
+  /// the faces are never held twice; a list handed out by shared_chunk() is freed by its last
+  /// holder). Afterwards every v_list is empty and the surface no longer matches the tree:
+  /// rebuild_all() before using it again.
+  [[nodiscard]] std::vector<std::vector<SurfaceFace>> take_v_lists();
   [[nodiscard]] const std::vector<std::uint32_t>& last_rebuilt() const noexcept { return m_rebuilt; }
   /// Chunk lists rewritten by the last update (sorted, each once).
   [[nodiscard]] const std::vector<ChunkId>& last_rebuilt_chunks() const noexcept { return m_rebuilt_chunks; }
@@ -177,7 +204,7 @@ class BoundarySurface {
 [[nodiscard]] geometry::TriangleMesh assemble_surface(std::span<const std::vector<SurfaceFace>> v_lists,
                                                       std::span<const Vec3> vertices_mm);
 /// The same, taking the v_lists over and freeing each root's faces once they are made into
-/// triangles (for large surfaces: the faces, 96 bytes each, are not held during the split).
+/// triangles (for large surfaces: the faces are not held during the split).
 [[nodiscard]] geometry::TriangleMesh assemble_surface(std::vector<std::vector<SurfaceFace>>&& v_lists,
                                                       std::span<const Vec3> vertices_mm);
 

@@ -159,11 +159,15 @@ class Simulator {
   [[nodiscard]] const SessionStats& stats() const noexcept { return m_stats; }
   /// The authoritative boundary surface (call after stop()).
   [[nodiscard]] const BoundarySurface& surface() const noexcept { return m_surface; }
-  /// The render consumer's copy of the v_lists (call after stop()).
-  [[nodiscard]] const std::vector<std::vector<SurfaceFace>>& render_v_lists() const noexcept { return m_render_lists; }
+  /// The render consumer's copy of the v_lists (call after stop(); made from its chunk
+  /// lists on the first call).
+  [[nodiscard]] const std::vector<std::vector<SurfaceFace>>& render_v_lists() const;
   /// Moves the render consumer's copy of the v_lists out (call after stop(); afterwards
   /// render_v_lists() is empty): lets a caller free the simulator before using the surface.
-  [[nodiscard]] std::vector<std::vector<SurfaceFace>> take_render_v_lists() noexcept { return std::move(m_render_lists); }
+  /// Where the copy is the surface's own lists (as after a finished session, when they are
+  /// shared), they are taken from the surface (BoundarySurface::take_v_lists), so the faces
+  /// are never held twice; surface() is then empty.
+  [[nodiscard]] std::vector<std::vector<SurfaceFace>> take_render_v_lists();
   [[nodiscard]] const Tool& tool() const noexcept { return m_tool; }
   /// The session's memory by part, as it is now (call after stop() for the final figures).
   [[nodiscard]] SessionMemory memory_use() const noexcept;
@@ -203,8 +207,9 @@ class Simulator {
 
   // The render consumer's copy: the chunk lists it was handed, shared with the surface until
   // a rebuild replaces them there (BoundarySurface::shared_chunk), so no face is copied.
-  std::vector<std::vector<std::shared_ptr<const std::vector<SurfaceFace>>>> m_render_chunks;
-  std::vector<std::vector<SurfaceFace>> m_render_lists;                // flattened (at stop)
+  // After stop(), render_v_lists() flattens it (freeing each chunk as it is appended).
+  mutable std::vector<std::vector<std::shared_ptr<const std::vector<SurfaceFace>>>> m_render_chunks;
+  mutable std::vector<std::vector<SurfaceFace>> m_render_lists;  // flattened on request, after stop()
   SurfaceSnapshotFn m_snapshot_fn;
   double m_snapshot_period_s = 0.0;
   double m_snapshot_end_s = 0.0;
