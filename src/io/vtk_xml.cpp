@@ -5,8 +5,12 @@
 // vtkZLibDataCompressor (ParaView's default when saving). Written: inline base64 binary with
 // UInt64 headers (exact), or ascii with 17 significant digits.
 #include <algorithm>
+#include <array>
+#include <bit>
 #include <cmath>
 #include <cstring>
+#include <ostream>
+#include <type_traits>
 
 #include <fmt/format.h>
 #include <zlib.h>
@@ -20,28 +24,47 @@ namespace {
 
 constexpr char kB64[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
 
-std::string base64_encode(std::string_view in) {
-  std::string out;
-  out.reserve((in.size() + 2) / 3 * 4);
-  std::size_t i = 0;
-  for (; i + 2 < in.size(); i += 3) {
-    const auto n = (std::uint32_t(std::uint8_t(in[i])) << 16) | (std::uint32_t(std::uint8_t(in[i + 1])) << 8) |
-                   std::uint8_t(in[i + 2]);
-    out += kB64[n >> 18];
-    out += kB64[(n >> 12) & 63];
-    out += kB64[(n >> 6) & 63];
-    out += kB64[n & 63];
+/// Base64 written straight to a stream as bytes arrive, so a large array is never held
+/// encoded (or copied) in memory: whole triples are encoded into a small buffer that is flushed
+/// every 48 KiB of text; finish() pads the last one or two bytes. The same text as encoding the
+/// whole byte string at once.
+class Base64Stream {
+ public:
+  explicit Base64Stream(std::ostream& out) : m_out(out) { m_text.reserve(kFlush + 4); }
+  void put(const void* data, std::size_t n) {
+    const auto* b = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < n; ++i) {
+      m_pending[m_count++] = b[i];
+      if (m_count == 3) {
+        quad(m_pending[0], m_pending[1], m_pending[2], 4);
+        m_count = 0;
+      }
+    }
   }
-  if (i < in.size()) {
-    std::uint32_t n = std::uint32_t(std::uint8_t(in[i])) << 16;
-    if (i + 1 < in.size()) n |= std::uint32_t(std::uint8_t(in[i + 1])) << 8;
-    out += kB64[n >> 18];
-    out += kB64[(n >> 12) & 63];
-    out += i + 1 < in.size() ? kB64[(n >> 6) & 63] : '=';
-    out += '=';
+  void finish() {
+    if (m_count == 1) quad(m_pending[0], 0, 0, 2);
+    if (m_count == 2) quad(m_pending[0], m_pending[1], 0, 3);
+    m_count = 0;
+    m_out.write(m_text.data(), std::streamsize(m_text.size()));
+    m_text.clear();
   }
-  return out;
-}
+
+ private:
+  static constexpr std::size_t kFlush = 48 * 1024;
+  void quad(unsigned char a, unsigned char b, unsigned char c, int keep) {
+    const std::uint32_t n = (std::uint32_t(a) << 16) | (std::uint32_t(b) << 8) | c;
+    const char q[4] = {kB64[n >> 18], kB64[(n >> 12) & 63], kB64[(n >> 6) & 63], kB64[n & 63]};
+    for (int j = 0; j < 4; ++j) m_text += j < keep ? q[j] : '=';
+    if (m_text.size() >= kFlush) {
+      m_out.write(m_text.data(), std::streamsize(m_text.size()));
+      m_text.clear();
+    }
+  }
+  std::ostream& m_out;
+  std::string m_text;
+  unsigned char m_pending[3] = {0, 0, 0};
+  int m_count = 0;
+};
 
 /// Decodes base64, skipping whitespace; false on a character outside the alphabet.
 bool base64_decode(std::string_view in, std::string& out) {
@@ -445,32 +468,38 @@ class ArrayWriter {
  public:
   ArrayWriter(std::ostream& out, bool ascii) : m_out(out), m_ascii(ascii) {}
 
+  /// A DataArray of @p count values, value i being @p value(i): written as generated, so the
+  /// caller builds no array of them. Binary: one base64 stream of a UInt64 byte count followed
+  /// by the little-endian values.
+  template <class T, class F>
+  void values(const char* type, const std::string& name, int comps, std::size_t count, F&& value, const char* indent,
+              int per_line) {
+    static_assert(std::endian::native == std::endian::little, "writer assumes a little-endian host");
+    open(type, name, comps, indent);
+    if (m_ascii) {
+      for (std::size_t i = 0; i < count; ++i) {
+        m_out << (i % std::size_t(per_line) ? " " : "\n");
+        if constexpr (std::is_floating_point_v<T>)
+          m_out << fmt::format("{:.17g}", value(i));
+        else
+          m_out << +value(i);
+      }
+    } else {
+      Base64Stream b64(m_out);
+      const std::uint64_t bytes = count * sizeof(T);
+      b64.put(&bytes, 8);
+      std::array<T, 512> chunk;
+      for (std::size_t i = 0; i < count;) {
+        std::size_t m = 0;
+        for (; m < chunk.size() && i < count; ++m, ++i) chunk[m] = value(i);
+        b64.put(chunk.data(), m * sizeof(T));
+      }
+      b64.finish();
+    }
+    close(indent);
+  }
   void doubles(const std::string& name, int comps, const std::vector<double>& v, const char* indent) {
-    open("Float64", name, comps, indent);
-    if (m_ascii) {
-      for (std::size_t i = 0; i < v.size(); ++i) m_out << (i % 9 ? " " : "\n") << fmt::format("{:.17g}", v[i]);
-    } else {
-      m_out << encode(v.data(), v.size() * sizeof(double));
-    }
-    close(indent);
-  }
-  void int64s(const std::string& name, const std::vector<std::int64_t>& v, const char* indent) {
-    open("Int64", name, 1, indent);
-    if (m_ascii) {
-      for (std::size_t i = 0; i < v.size(); ++i) m_out << (i % 12 ? " " : "\n") << v[i];
-    } else {
-      m_out << encode(v.data(), v.size() * sizeof(std::int64_t));
-    }
-    close(indent);
-  }
-  void uint8s(const std::string& name, const std::vector<std::uint8_t>& v, const char* indent) {
-    open("UInt8", name, 1, indent);
-    if (m_ascii) {
-      for (std::size_t i = 0; i < v.size(); ++i) m_out << (i % 20 ? " " : "\n") << int(v[i]);
-    } else {
-      m_out << encode(v.data(), v.size());
-    }
-    close(indent);
+    values<double>("Float64", name, comps, v.size(), [&](std::size_t i) { return v[i]; }, indent, 9);
   }
 
  private:
@@ -481,24 +510,23 @@ class ArrayWriter {
     if (!m_ascii) m_out << "\n" << indent << "  ";
   }
   void close(const char* indent) { m_out << "\n" << indent << "</DataArray>\n"; }
-  /// One base64 stream of a UInt64 byte count followed by the little-endian data.
-  static std::string encode(const void* data, std::size_t bytes) {
-    static_assert(std::endian::native == std::endian::little, "writer assumes a little-endian host");
-    std::string raw(8 + bytes, '\0');
-    const std::uint64_t n = bytes;
-    std::memcpy(raw.data(), &n, 8);
-    if (bytes) std::memcpy(raw.data() + 8, data, bytes);
-    return base64_encode(raw);
-  }
   std::ostream& m_out;
   bool m_ascii;
 };
 
-std::vector<double> flatten(const std::vector<Vec3>& pts) {
-  std::vector<double> v;
-  v.reserve(pts.size() * 3);
-  for (const auto& p : pts) v.insert(v.end(), {p.x(), p.y(), p.z()});
-  return v;
+/// The points as a Float64 array of 3 components, read from @p pts as written.
+void write_points(ArrayWriter& w, const std::vector<Vec3>& pts) {
+  w.values<double>("Float64", "Points", 3, pts.size() * 3, [&](std::size_t i) { return pts[i / 3][int(i % 3)]; },
+                   "        ", 9);
+}
+
+/// Connectivity and offsets of cells of @p n corners each, read from @p cells as written.
+template <class Cells>
+void write_cells(ArrayWriter& w, const Cells& cells, std::size_t n) {
+  w.values<std::int64_t>("Int64", "connectivity", 1, cells.size() * n,
+                         [&](std::size_t i) { return std::int64_t(cells[i / n][i % n]); }, "        ", 12);
+  w.values<std::int64_t>("Int64", "offsets", 1, cells.size(), [&](std::size_t i) { return std::int64_t((i + 1) * n); },
+                         "        ", 12);
 }
 
 void write_fields(ArrayWriter& w, std::ostream& out, const char* tag, const geometry::FieldMap& fields) {
@@ -615,16 +643,9 @@ void write_vtp(std::ostream& out, const geometry::TriangleMesh& mesh, bool ascii
   write_fields(w, out, "PointData", mesh.point_fields);
   write_fields(w, out, "CellData", mesh.cell_fields);
   out << "      <Points>\n";
-  w.doubles("Points", 3, flatten(mesh.vertices), "        ");
+  write_points(w, mesh.vertices);
   out << "      </Points>\n      <Polys>\n";
-  std::vector<std::int64_t> conn, offsets;
-  conn.reserve(mesh.triangles.size() * 3);
-  for (const auto& t : mesh.triangles) {
-    conn.insert(conn.end(), t.begin(), t.end());
-    offsets.push_back(static_cast<std::int64_t>(conn.size()));
-  }
-  w.int64s("connectivity", conn, "        ");
-  w.int64s("offsets", offsets, "        ");
+  write_cells(w, mesh.triangles, 3);
   out << "      </Polys>\n    </Piece>\n  </PolyData>\n</VTKFile>\n";
 }
 
@@ -635,17 +656,11 @@ void write_vtu(std::ostream& out, const geometry::TetMesh& mesh, bool ascii) {
   write_fields(w, out, "PointData", mesh.point_fields);
   write_fields(w, out, "CellData", mesh.cell_fields);
   out << "      <Points>\n";
-  w.doubles("Points", 3, flatten(mesh.vertices), "        ");
+  write_points(w, mesh.vertices);
   out << "      </Points>\n      <Cells>\n";
-  std::vector<std::int64_t> conn, offsets;
-  conn.reserve(mesh.tets.size() * 4);
-  for (const auto& t : mesh.tets) {
-    conn.insert(conn.end(), t.begin(), t.end());
-    offsets.push_back(static_cast<std::int64_t>(conn.size()));
-  }
-  w.int64s("connectivity", conn, "        ");
-  w.int64s("offsets", offsets, "        ");
-  w.uint8s("types", std::vector<std::uint8_t>(mesh.tets.size(), 10), "        ");
+  write_cells(w, mesh.tets, 4);
+  w.values<std::uint8_t>("UInt8", "types", 1, mesh.tets.size(), [](std::size_t) { return std::uint8_t(10); }, "        ",
+                         20);
   out << "      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n";
 }
 
