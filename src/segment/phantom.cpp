@@ -390,7 +390,8 @@ Scene make_scene(PhantomKind kind, const PhantomOptions& o) {
                                                                       {Vec3(70, 56, 15), Vec3(45, 56, 65), 1.5},
                                                                       {Vec3(36, 52, 48), Vec3(80, 46, 34), 1.0}}};
       for (const auto& [va, vb, r] : vessels)
-        s.layers.push_back({[=](const Vec3& p) { return sd_capsule(p, va, vb, r, r); }, hu.soft_tissue_hu, 0, 0.0, 0.0});
+        s.layers.push_back({[a = va, b = vb, rad = r](const Vec3& p) { return sd_capsule(p, a, b, rad, rad); },
+                            hu.soft_tissue_hu, 0, 0.0, 0.0});  // named captures: clang 14 cannot capture bindings
       const Vec3 top(16.0, 40.0, 92.0), carina(16.0, 40.0, 70.0), tip(58.0, 40.0, 30.0);
       s.layers.push_back({[=](const Vec3& p) { return std::min(sd_capsule(p, top, carina, 6.0, 6.0), sd_capsule(p, carina, tip, 6.0, 6.0)); },
                           hu.air_hu, 1, 0.0, 0.0});
