@@ -64,6 +64,16 @@ std::string slurp(const fs::path& p) {
 
 nlohmann::json read_json(const fs::path& p) { return nlohmann::json::parse(slurp(p)); }
 
+/// The volume (mm³) `ido drill` removes from dir/block.vtu along @p path with @p tool: what a
+/// session recorded in the window must replay to.
+double drill_replay_removed(const fs::path& dir, const fs::path& path, const std::string& tool) {
+  const auto cli = test::run_tool(fmt::format("drill {} --tool {} --path {} -o {} --report {} -q",
+                                              (dir / "block.vtu").string(), tool, path.string(),
+                                              (dir / "out.vtu").string(), (dir / "cli_drill.json").string()));
+  EXPECT_EQ(cli.exit_code, 0) << cli.err;
+  return read_json(dir / "cli_drill.json")["removed_volume_mm3"].get<double>();
+}
+
 /// Runs `ido view ARGS` in a fresh Xvfb server (24-bit screen) and captures its output.
 test::CommandResult run_view(const std::string& args, const fs::path& dir) {
   const fs::path out = dir / "view-out.txt", err = dir / "view-err.txt";
@@ -360,11 +370,7 @@ TEST_F(ViewWindow, DrillSessionByMouseReplaysInIdoDrillToTheSameRemovedVolume) {
   }
   ASSERT_GT(times.size(), 50u);
   EXPECT_GE(double(times.size()), 0.9 * (times.back() - times.front()) * 1000.0);
-  const auto cli = test::run_tool(fmt::format("drill {} --tool sphere:radius=2 --path {} -o {} --report {} -q",
-                                              (dir / "block.vtu").string(), (dir / "path.csv").string(),
-                                              (dir / "out.vtu").string(), (dir / "cli_drill.json").string()));
-  ASSERT_EQ(cli.exit_code, 0) << cli.err;
-  const double replayed = read_json(dir / "cli_drill.json")["removed_volume_mm3"].get<double>();
+  const double replayed = drill_replay_removed(dir, dir / "path.csv", "sphere:radius=2");
   EXPECT_TRUE(test::rel_near(removed, replayed, 0.02)) << removed << " vs " << replayed;
   // The window shows the drilled block (flat-shaded material colour) with the hole in its top.
   const test::Png png = test::read_png(dir / "shots" / "drill.png");
@@ -632,11 +638,7 @@ TEST_F(ViewWindow, PathReplayedInTheDrillWorkspaceRemovesWhatIdoDrillRemoves) {
   EXPECT_EQ(view_report["source"], "path:" + (dir / "path.csv").string());
   const double removed = view_report["removed_volume_mm3"].get<double>();
   EXPECT_GT(removed, 20.0) << "the burr went 3 mm deep and 2 mm across: tens of mm³";
-  const auto cli = test::run_tool(fmt::format("drill {} --tool sphere:radius=2 --path {} -o {} --report {} -q",
-                                              (dir / "block.vtu").string(), (dir / "path.csv").string(),
-                                              (dir / "out.vtu").string(), (dir / "cli_drill.json").string()));
-  ASSERT_EQ(cli.exit_code, 0) << cli.err;
-  const double replayed = read_json(dir / "cli_drill.json")["removed_volume_mm3"].get<double>();
+  const double replayed = drill_replay_removed(dir, dir / "path.csv", "sphere:radius=2");
   EXPECT_TRUE(test::rel_near(removed, replayed, 0.02)) << removed << " vs " << replayed;
   // The tool followed the path: the recorded path ends where the replayed one does.
   const auto recorded = drill::ScriptedTrajectory::load_csv(dir / "recorded.csv");
@@ -681,11 +683,7 @@ TEST_F(ViewWindow, TurnedToolWithAShaftRecordsItsOrientationAndReplaysInIdoDrill
   const Vec3 axis = path.poses().back().orientation * Vec3::UnitZ();
   EXPECT_TRUE(test::near((axis - Vec3(std::sqrt(0.5), 0, std::sqrt(0.5))).norm(), 0.0, 1e-12)) << axis.transpose();
   // `ido drill` with the same tool replays it to the same removed volume.
-  const auto cli = test::run_tool(fmt::format("drill {} --tool sphere:radius=2,shaft=1 --path {} -o {} --report {} -q",
-                                              (dir / "block.vtu").string(), (dir / "path.csv").string(),
-                                              (dir / "out.vtu").string(), (dir / "cli_drill.json").string()));
-  ASSERT_EQ(cli.exit_code, 0) << cli.err;
-  const double replayed = read_json(dir / "cli_drill.json")["removed_volume_mm3"].get<double>();
+  const double replayed = drill_replay_removed(dir, dir / "path.csv", "sphere:radius=2,shaft=1");
   EXPECT_TRUE(test::rel_near(removed, replayed, 0.02)) << removed << " vs " << replayed;
 }
 
@@ -778,11 +776,7 @@ TEST_F(ViewWindow, DeviceOverTheUdpBridgeDrillsAndItsRecordedPathReplaysInIdoDri
   EXPECT_TRUE(test::near((recorded.poses().front().position_mm - hover).norm(), 0.0, 1e-12));
   EXPECT_TRUE(test::near((recorded.poses().back().position_mm - p).norm(), 0.0, 1e-12));
   // Replayed by `ido drill`, the recorded session removes the same volume (the threads' sampling: 2 %).
-  const auto cli = test::run_tool(fmt::format("drill {} --tool sphere:radius=2 --path {} -o {} --report {} -q",
-                                              (dir / "block.vtu").string(), (dir / "recorded.csv").string(),
-                                              (dir / "out.vtu").string(), (dir / "cli_drill.json").string()));
-  ASSERT_EQ(cli.exit_code, 0) << cli.err;
-  const double replayed = read_json(dir / "cli_drill.json")["removed_volume_mm3"].get<double>();
+  const double replayed = drill_replay_removed(dir, dir / "recorded.csv", "sphere:radius=2");
   EXPECT_TRUE(test::rel_near(removed, replayed, 0.02)) << removed << " vs " << replayed;
 }
 
