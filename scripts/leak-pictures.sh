@@ -27,7 +27,7 @@ for kind, organ in cases.items():
         ido.write_volume(f"{tmp}/{name}-mask.nii.gz", ido.surface_to_mask(r.surface, ph.ct))
         s = ido.compare(ido.surface_to_mask(r.surface, ph.ct), ph.labels)
         facts[name] = {"dice": round(s["dice"], 4), "volume_ratio": round(s["volume_ratio"], 2), "slice_i": int(seed[0]),
-                       "leaks": [e["cause"] for e in r.report["leaks"]]}
+                       "leaks": [e["cause"] for e in r.report["leak_control"]["events"]]}
 # L3 of the shared abdomen-spine scan, when it is found (IDO_SHARED_DATA or ../shared/data).
 import os
 data = os.environ.get("IDO_SHARED_DATA", "../shared/data")
@@ -40,7 +40,7 @@ if os.path.exists(f"{data}/abdomen-spine/ct.nii.gz"):
         ido.write_mesh(f"{tmp}/{name}.ply", r.surface)
         ido.write_volume(f"{tmp}/{name}-mask.nii.gz", ido.surface_to_mask(r.surface, ct))
         facts[name] = {"slice_i": 58, "volume_ml": round(r.report["volume_mm3"] / 1000, 1),
-                       "leaks": [e["cause"] for e in r.report["leaks"]]}
+                       "leaks": [e["cause"] for e in r.report["leak_control"]["events"]]}
 json.dump(facts, open(f"{tmp}/facts.json", "w"), indent=1)
 PY
 for f in "$tmp"/*-o*.ply; do
