@@ -10,7 +10,6 @@
 #include <cstdint>
 #include <cstdio>
 #include <optional>
-#include <string_view>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -168,8 +167,8 @@ template <class Mesher>
 geometry::TetMesh run_mesher(const TetmeshOptions& o, Mesher&& mesher) {
   try {
     return mesher();
-  } catch (const InvalidInput& e) {
-    if (!o.edge_mm || std::string_view(e.what()).find("edge_mm is too small") == std::string_view::npos) throw;
+  } catch (const meshing::EdgeTooSmall&) {
+    if (!o.edge_mm) throw;
     throw InvalidInput(fmt::format("--edge {:g}: the lattice spacing is too small for {}: the meshing lattice "
                                    "would have more vertices than the mesher accepts; give a larger --edge",
                                    *o.edge_mm, o.input));

@@ -179,7 +179,7 @@ geometry::TetMesh tetrahedralize(const image::Volume<float>& signed_distance_mm,
     const double n[3] = {std::ceil(ext[0] / h), std::ceil(ext[1] / h), std::ceil(ext[2] / h)};
     const double total = (n[0] + 1) * (n[1] + 1) * (n[2] + 1) + n[0] * n[1] * n[2];
     if (!(total < 2.0e9 / 11.0))
-      throw InvalidInput("tetrahedralize: edge_mm is too small for this field (lattice of " +
+      throw EdgeTooSmall("tetrahedralize: edge_mm is too small for this field (lattice of " +
                          std::to_string(total) + " vertices)");
     L.nx = std::int64_t(n[0]);
     L.ny = std::int64_t(n[1]);
@@ -406,7 +406,7 @@ geometry::TetMesh tetrahedralize_surface(const geometry::TriangleMesh& surface,
     count *= double(size[std::size_t(a)]);
   }
   if (!(count < 2.0e9))
-    throw InvalidInput("tetrahedralize_surface: edge_mm is too small for this surface");
+    throw EdgeTooSmall("tetrahedralize_surface: edge_mm is too small for this surface");
   report(progress, 0.0, "tetrahedralize: signed distance of the surface");
   const image::Volume<float> grid(size, Vec3::Constant(s), origin);
   SignedDistanceOptions sd;

@@ -304,7 +304,7 @@ geometry::TetMesh tetrahedralize_graded(const image::Volume<float>& field_volume
   for (int a = 0; a < 3; ++a) {
     const double n = std::ceil(ext[a] / top_size);
     if (!(n * double(4 << top) < double(kCoordLimit) - 8))
-      throw InvalidInput("tetrahedralize: edge_mm is too small for this field (graded lattice "
+      throw EdgeTooSmall("tetrahedralize: edge_mm is too small for this field (graded lattice "
                          "wider than " + std::to_string(kCoordLimit / 4) + " cells)");
     n_top[std::size_t(a)] = std::int64_t(n);
   }
@@ -341,7 +341,7 @@ geometry::TetMesh tetrahedralize_graded(const image::Volume<float>& field_volume
     const GradedLattice L = build_lattice(tree, p0, h);
     const std::size_t nv = L.coord.size();
     if (nv >= std::size_t(std::numeric_limits<Id>::max() / 2))
-      throw InvalidInput("tetrahedralize: edge_mm is too small for this field (graded lattice of " +
+      throw EdgeTooSmall("tetrahedralize: edge_mm is too small for this field (graded lattice of " +
                          std::to_string(nv) + " vertices)");
     report(progress, 0.2, "tetrahedralize: sampling the field");
     std::vector<double> value;

@@ -418,7 +418,7 @@ TEST(Tetrahedralize, BadInputThrows) {
   const auto field = sample_field(sphere(2), 8, 1.0);
   EXPECT_THROW((void)tetrahedralize(field, {.edge_mm = -1}), InvalidInput);
   EXPECT_THROW((void)tetrahedralize(field, {.edge_mm = NAN}), InvalidInput);
-  EXPECT_THROW((void)tetrahedralize(field, {.edge_mm = 1e-6}), InvalidInput);
+  EXPECT_THROW((void)tetrahedralize(field, {.edge_mm = 1e-6}), EdgeTooSmall);  // its own type: callers name their option
   EXPECT_THROW((void)tetrahedralize(field, {.edge_mm = -1, .graded = true}), InvalidInput);
   auto bad = field;
   bad(1, 1, 1) = NAN;

@@ -1,12 +1,21 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 
+#include "ido/core/error.h"
 #include "ido/core/progress.h"
 #include "ido/geometry/tet_mesh.h"
 #include "ido/geometry/triangle_mesh.h"
 #include "ido/image/volume.h"
 
 namespace ido::meshing {
+
+/// The lattice spacing (edge_mm) is too small for the input: the lattice would have more
+/// vertices or cells than the mesher indexes. An InvalidInput of its own type, so a caller can
+/// name its own option (the CLI's --edge) without reading the message.
+class EdgeTooSmall : public InvalidInput {
+ public:
+  using InvalidInput::InvalidInput;
+};
 
 /// Tunables of tetrahedralize.
 struct TetrahedralizeOptions {
@@ -77,8 +86,8 @@ inline constexpr double kGradedLatticeMaxDihedralDeg = 135.0;
 /// Output vertices are in world coordinates (mm).
 /// @param signed_distance_mm signed distance (mm), negative inside; any orientation/spacing.
 /// @throws ido::InvalidInput if the field is empty or has fewer than 2 voxels along an axis,
-///         if edge_mm is negative or not finite, or if the lattice
-///         would exceed 2^31 vertices.
+///         or if edge_mm is negative or not finite; EdgeTooSmall if the lattice would
+///         exceed 2^31 vertices.
 /// @throws ido::Cancelled if @p progress is cancelled.
 [[nodiscard]] geometry::TetMesh tetrahedralize(const image::Volume<float>& signed_distance_mm,
                                                const TetrahedralizeOptions& options = {},
@@ -90,8 +99,8 @@ inline constexpr double kGradedLatticeMaxDihedralDeg = 135.0;
 /// bounds plus 2h, exact within 2h of the surface, then stuffed as tetrahedralize() does.
 /// edge_mm = 0 takes h = the surface's mean edge length.
 /// @throws ido::InvalidInput for a surface without triangles, an index out of range, a
-///         negative or non-finite edge_mm, or a grid that would exceed 2^31 voxels; as
-///         tetrahedralize() otherwise.
+///         negative or non-finite edge_mm; EdgeTooSmall for a grid that would exceed 2^31
+///         voxels; as tetrahedralize() otherwise.
 [[nodiscard]] geometry::TetMesh tetrahedralize_surface(const geometry::TriangleMesh& surface,
                                                        const TetrahedralizeOptions& options = {},
                                                        Progress* progress = nullptr);
