@@ -23,6 +23,7 @@
 #include "ido/view/segment_session.h"
 #include "ido/view/slice_view.h"
 #include "ido/view/tet_section.h"
+#include "support/ball_ct.h"
 #include "support/test_support.h"
 
 namespace ido {
@@ -461,17 +462,6 @@ TEST(DeformSession, ParametersChangedBetweenStepsContinueAsTheLibraryWithTheNewV
 
 // ---- the balloon on its worker thread -------------------------------------------------------
 
-/// A 32³ CT (anisotropic voxels) of a ball of radius 9 mm, 350 HU in 40 HU.
-std::shared_ptr<const image::Volume<float>> ball_ct() {
-  image::Volume<float> ct({28, 32, 26}, Vec3(1.1, 1.0, 1.2), Vec3(-12, 4, 30));
-  const Vec3 centre = ct.index_to_world(Vec3(14, 16, 13));
-  for (std::int64_t k = 0; k < ct.size(2); ++k)
-    for (std::int64_t j = 0; j < ct.size(1); ++j)
-      for (std::int64_t i = 0; i < ct.size(0); ++i)
-        ct(i, j, k) = (ct.index_to_world(Vec3(double(i), double(j), double(k))) - centre).norm() < 9.0 ? 350.f : 40.f;
-  return std::make_shared<const image::Volume<float>>(std::move(ct));
-}
-
 std::shared_ptr<const view::SegmentState> wait_for(view::SegmentSession& s, view::SegmentStage stage) {
   const auto start = std::chrono::steady_clock::now();
   for (;;) {
@@ -490,7 +480,7 @@ void expect_identical(const segment::BalloonResult& a, const segment::BalloonRes
 }
 
 TEST(SegmentSession, LiveBalloonEqualsOneCallSegmentation) {
-  const auto ct = ball_ct();
+  const auto ct = std::make_shared<const image::Volume<float>>(test::ball_ct());
   const std::vector<Vec3> seeds = {ct->index_to_world(Vec3(16, 15, 14))};
   const segment::BalloonOptions options = segment::organ_options(segment::Organ::Generic);
   const segment::BalloonResult expected = segment::segment_balloon(*ct, seeds, options);
@@ -508,7 +498,7 @@ TEST(SegmentSession, LiveBalloonEqualsOneCallSegmentation) {
 }
 
 TEST(SegmentSession, PausedSteppedAndRestartedRunsGiveTheSameResult) {
-  const auto ct = ball_ct();
+  const auto ct = std::make_shared<const image::Volume<float>>(test::ball_ct());
   const std::vector<Vec3> seeds = {ct->index_to_world(Vec3(13, 17, 12))};
   const segment::BalloonOptions options = segment::organ_options(segment::Organ::Generic);
   const segment::BalloonResult expected = segment::segment_balloon(*ct, seeds, options);
@@ -539,7 +529,7 @@ TEST(SegmentSession, PausedSteppedAndRestartedRunsGiveTheSameResult) {
 }
 
 TEST(SegmentSession, ABadSeedFailsWithTheBalloonsMessage) {
-  const auto ct = ball_ct();
+  const auto ct = std::make_shared<const image::Volume<float>>(test::ball_ct());
   view::SegmentSession session(ct);
   session.start({Vec3(1e4, 0, 0)}, {});
   const auto st = wait_for(session, view::SegmentStage::Done);
@@ -548,7 +538,7 @@ TEST(SegmentSession, ABadSeedFailsWithTheBalloonsMessage) {
 }
 
 TEST(SegmentOutput, ReportRecordsSeedsOrganAndSurfaceFigures) {
-  const auto ct = ball_ct();
+  const auto ct = std::make_shared<const image::Volume<float>>(test::ball_ct());
   const std::vector<Vec3> seeds = {ct->index_to_world(Vec3(16, 15, 14))};
   view::SegmentRequest request{"ct.nii.gz", seeds, segment::Organ::Artery, segment::organ_options(segment::Organ::Artery)};
   const segment::BalloonResult r = segment::segment_balloon(*ct, seeds, request.options);

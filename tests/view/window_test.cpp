@@ -40,6 +40,7 @@
 #include "ido/segment/organ.h"
 #include "ido/view/orbit_camera.h"
 #include "ido/view/slice_view.h"
+#include "support/ball_ct.h"
 #include "support/png_read.h"
 #include "support/test_support.h"
 
@@ -91,17 +92,6 @@ test::CommandResult run_view(const std::string& args, const fs::path& dir) {
   return r;
 }
 
-/// A CT (anisotropic voxels, off-origin) of a ball of radius 9 mm, 350 HU in 40 HU.
-image::Volume<float> ball_ct() {
-  image::Volume<float> ct({28, 32, 26}, Vec3(1.1, 1.0, 1.2), Vec3(-12, 4, 30));
-  const Vec3 centre = ct.index_to_world(Vec3(14, 16, 13));
-  for (std::int64_t k = 0; k < ct.size(2); ++k)
-    for (std::int64_t j = 0; j < ct.size(1); ++j)
-      for (std::int64_t i = 0; i < ct.size(0); ++i)
-        ct(i, j, k) = (ct.index_to_world(Vec3(double(i), double(j), double(k))) - centre).norm() < 9.0 ? 350.f : 40.f;
-  return ct;
-}
-
 nlohmann::json event(std::int64_t frame, const char* type) { return {{"frame", frame}, {"type", type}}; }
 nlohmann::json mouse(std::int64_t frame, const char* type, double x, double y) {
   nlohmann::json e = event(frame, type);
@@ -145,7 +135,7 @@ class ViewWindow : public ::testing::Test {
         << "xvfb-run is missing: scripts/install-deps.sh installs xvfb";
     dir = test::scratch_dir(::testing::UnitTest::GetInstance()->current_test_info()->name());
     ct_path = dir / "ball.nii.gz";
-    io::write_volume(ct_path, ball_ct());
+    io::write_volume(ct_path, test::ball_ct());
     ct = io::read_volume(ct_path);  // as both tools read it
   }
   fs::path dir, ct_path;
