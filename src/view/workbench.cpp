@@ -1898,13 +1898,19 @@ void Workbench::overlays() {
   }
 }
 
+/// Viewport and scissor on the window rectangle @p r (points, y down) of a framebuffer
+/// @p fb_height pixels high with @p fb_scale pixels per point (GL counts y up).
+void clip_to(const PixelRect& r, double fb_scale, int fb_height) {
+  const auto x = GLint(r.x * fb_scale), y = GLint(fb_height - (r.y + r.height) * fb_scale);
+  const auto w = GLsizei(r.width * fb_scale), h = GLsizei(r.height * fb_scale);
+  glViewport(x, y, w, h);
+  glScissor(x, y, w, h);
+}
+
 void Workbench::draw_slice_view(int axis, double fb_scale, int fb_height) {
   const SliceView& v = *m_slice_views[std::size_t(axis)];
   const PixelRect& r = v.rect();
-  glViewport(GLint(r.x * fb_scale), GLint(fb_height - (r.y + r.height) * fb_scale), GLsizei(r.width * fb_scale),
-             GLsizei(r.height * fb_scale));
-  glScissor(GLint(r.x * fb_scale), GLint(fb_height - (r.y + r.height) * fb_scale), GLsizei(r.width * fb_scale),
-            GLsizei(r.height * fb_scale));
+  clip_to(r, fb_scale, fb_height);
   glClearColor(0, 0, 0, 1);
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
   glDisable(GL_DEPTH_TEST);
@@ -1915,10 +1921,7 @@ void Workbench::draw_slice_view(int axis, double fb_scale, int fb_height) {
 }
 
 void Workbench::draw_3d(const PixelRect& r, double fb_scale, int fb_height) {
-  glViewport(GLint(r.x * fb_scale), GLint(fb_height - (r.y + r.height) * fb_scale), GLsizei(r.width * fb_scale),
-             GLsizei(r.height * fb_scale));
-  glScissor(GLint(r.x * fb_scale), GLint(fb_height - (r.y + r.height) * fb_scale), GLsizei(r.width * fb_scale),
-            GLsizei(r.height * fb_scale));
+  clip_to(r, fb_scale, fb_height);
   glClearColor(0.12f, 0.13f, 0.16f, 1);
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
   glEnable(GL_DEPTH_TEST);
