@@ -30,6 +30,7 @@
 #include "ido/drill/simulator.h"
 #include "ido/drill/tet_hierarchy.h"
 #include "ido/drill/tool.h"
+#include "ido/geometry/aabb.h"
 #include "ido/geometry/mesh_checks.h"
 #include "ido/geometry/tet_quality.h"
 #include "ido/io/mesh_io.h"
@@ -203,11 +204,8 @@ json run_deformation(const geometry::TetMesh& mesh, const fs::path& dir, int ste
   const fs::path sim_dir = dir / "deformation";
   fs::create_directories(sim_dir);
   io::write_tet_mesh(sim_dir / "body.vtu", mesh);
-  Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
-  for (const auto& v : mesh.vertices) {
-    lo = lo.cwiseMin(v);
-    hi = hi.cwiseMax(v);
-  }
+  const geometry::Aabb box = geometry::Aabb::of(mesh.vertices);
+  const Vec3 &lo = box.min, &hi = box.max;
   const double clamp_z = lo.z() + 0.15 * (hi.z() - lo.z());
   const json scene = {
       {"description", "pipeline: the segmented vessel, clamped at its lower end, sagging under gravity"},

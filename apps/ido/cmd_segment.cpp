@@ -18,6 +18,7 @@
 #include "cli_util.h"
 #include "command.h"
 #include "ido/core/error.h"
+#include "ido/geometry/aabb.h"
 #include "ido/io/mesh_io.h"
 #include "ido/io/report_json.h"
 #include "ido/io/volume_io.h"
@@ -207,12 +208,9 @@ void run(const SegmentCliOptions& o, const GlobalOptions& g) {
   if (writer) {
     // The camera frames every kept surface and the final one; the slice is cropped to them.
     kept.push_back({r.report.iterations, r.surface});
-    Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
-    for (const auto& k : kept)
-      for (const Vec3& p : k.surface.vertices) {
-        lo = lo.cwiseMin(p);
-        hi = hi.cwiseMax(p);
-      }
+    geometry::Aabb box;
+    for (const auto& k : kept) box.extend(geometry::Aabb::of(k.surface.vertices));
+    const Vec3 &lo = box.min, &hi = box.max;
     const int left_w = writer->width() / 2;
     const viz::Camera camera =
         viz::Camera::orbit(lo, hi, 30.0, 20.0, viz::Projection::Perspective, double(left_w) / writer->height());
