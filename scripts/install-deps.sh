@@ -10,7 +10,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libinsighttoolkit5-dev
   libpng-dev libosmesa6-dev
-  libglfw3-dev libimgui-dev libgl-dev libgl1-mesa-dri xvfb xauth
+  libglfw3-dev libimgui-dev libgl-dev libegl-dev libegl-mesa0 libgl1-mesa-dri xvfb xauth
   python3 python3-dev python3-numpy python3-pytest pybind11-dev python3-vtk9 python3-gmsh gmsh zlib1g-dev
   clang libclang-rt-14-dev
 )

@@ -2,9 +2,12 @@
 // `ido view [FILE...] [--script EVENTS.json --screenshots DIR] [--record EVENTS.json] [--frames N]
 //  [--size WxH] [--organ NAME] [--seed-voxel I,J,K] [--stop-voxel I,J,K] [--surface S.stl] [--mask M.nii.gz]
 //  [--report R.json] [--tet-output M.vtu] [--tet-edge MM] [--burr-radius MM] [--shaft-radius MM] [--drill-max S]
-//  [--drill-path P.csv] [--drill-report R.json] [--drill-replay P.csv] [--drill-udp PORT] [--deform-log LOG.json]`:
+//  [--drill-path P.csv] [--drill-report R.json] [--drill-replay P.csv] [--drill-udp PORT] [--deform-log LOG.json]
+//  [--roi x0,y0,z0,x1,y1,z1] [--max-radius MM] [--snapshot OUT.png]`:
 //  the interactive workbench. Presentation only: the workbench is ido::view::run_workbench.
+#include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -35,6 +38,9 @@ struct ViewCliOptions {
   std::string drill_path, drill_report, drill_replay;
   int drill_udp_port = 0;
   std::string deform_log;
+  std::string roi;
+  std::optional<double> max_radius_mm;
+  std::string snapshot;
 };
 
 void run(const ViewCliOptions& o, const GlobalOptions& g) {
@@ -69,6 +75,16 @@ void run(const ViewCliOptions& o, const GlobalOptions& g) {
   if (!o.drill_report.empty()) check_output_file(o.drill_report, "--drill-report");
   w.deform_log = o.deform_log;
   if (!o.deform_log.empty()) check_output_file(o.deform_log, "--deform-log");
+  if (!o.roi.empty()) w.roi_mm = parse_roi(o.roi);
+  w.max_radius_mm = o.max_radius_mm;
+  w.snapshot = o.snapshot;
+  if (!o.snapshot.empty()) {
+    if (std::filesystem::path(o.snapshot).extension() != ".png")
+      throw InvalidInput(fmt::format("--snapshot {}: the picture is written as PNG: name a .png file", o.snapshot));
+    check_output_file(o.snapshot, "--snapshot");
+    if (!o.script.empty() || !o.record.empty())
+      throw InvalidInput("--snapshot renders one picture without a window: it does not take --script or --record");
+  }
   w.quiet = g.quiet;
   (void)view::run_workbench(w);
 }
@@ -110,6 +126,15 @@ void setup(CLI::App& app, const GlobalOptions& g) {
                   "UDP port on 127.0.0.1 where the Drill workspace's device bridge listens (u); 0 (default) = any free port");
   sub->add_option("--deform-log", opts->deform_log,
                   "write the pulled particle's positions, time and momentum per shown step to this JSON on exit");
+  sub->add_option("--roi", opts->roi,
+                  "the Segment workspace's first region of interest x0,y0,z0,x1,y1,z1 (world mm), as ido segment --roi; "
+                  "ctrl+drag on a slice draws one");
+  sub->add_option("--max-radius", opts->max_radius_mm,
+                  "the Segment workspace's first bound on the organ's local radius (mm): where a wider ball fits, the "
+                  "front does not go");
+  sub->add_option("--snapshot", opts->snapshot,
+                  "no window: render one picture of what was opened (seeds grown first) off-screen, without a display, "
+                  "to this PNG and exit");
   sub->callback([opts, &g] { run(*opts, g); });
 }
 

@@ -100,7 +100,11 @@ void attribute(GLuint index, GLint components, GLsizei stride_floats, std::size_
                         reinterpret_cast<const void*>(offset_floats * sizeof(float)));
 }
 
+std::uint64_t g_uploads = 0;  // the render thread's (GL calls are made on one thread)
+
 }  // namespace
+
+std::uint64_t upload_count() noexcept { return g_uploads; }
 
 MeshBuffer::MeshBuffer() {
   glGenVertexArrays(1, &m_vao);
@@ -122,6 +126,7 @@ MeshBuffer::~MeshBuffer() {
 }
 
 void MeshBuffer::upload(const geometry::TriangleMesh& mesh, const Vec3& colour, bool flat) {
+  ++g_uploads;
   std::vector<Vec3> normals(mesh.vertices.size(), Vec3::Zero());
   for (const Tri& t : mesh.triangles) {
     const Vec3 n = (mesh.vertices[std::size_t(t[1])] - mesh.vertices[std::size_t(t[0])])
@@ -173,6 +178,7 @@ void MeshBuffer::upload(const geometry::TriangleMesh& mesh, const Vec3& colour, 
 }
 
 void MeshBuffer::upload_coloured(const geometry::TriangleMesh& mesh, const std::vector<Vec3>& vertex_colours) {
+  ++g_uploads;
   std::vector<float> data;
   data.reserve(mesh.triangles.size() * 27);
   for (const Tri& t : mesh.triangles) {
@@ -224,6 +230,7 @@ void LineBuffer::add(const Vec3& a, const Vec3& b, const Vec3& rgb) {
 }
 
 void LineBuffer::upload() {
+  ++g_uploads;
   glBindBuffer(GL_ARRAY_BUFFER, m_vbo);
   glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(m_data.size() * sizeof(float)), m_data.data(), GL_DYNAMIC_DRAW);
   m_count = GLsizei(m_data.size() / 6);
@@ -259,12 +266,14 @@ SliceQuad::~SliceQuad() {
 }
 
 void SliceQuad::upload_image(int width, int height, const std::vector<float>& values) {
+  ++g_uploads;
   glBindTexture(GL_TEXTURE_2D, m_texture);
   glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
   glTexImage2D(GL_TEXTURE_2D, 0, GL_R32F, width, height, 0, GL_RED, GL_FLOAT, values.data());
 }
 
 void SliceQuad::set_corners(const std::array<Vec3, 4>& corners) {
+  ++g_uploads;
   static constexpr float kUv[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
   std::vector<float> data;
   for (int i : {0, 1, 2, 0, 2, 3}) {
@@ -330,7 +339,9 @@ void Painter::draw_slice(const SliceQuad& quad, const Mat4f& mvp, double window,
 std::vector<std::uint8_t> read_pixels(int width, int height) {
   std::vector<std::uint8_t> bottom_up(std::size_t(width) * std::size_t(height) * 4);
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
-  glReadBuffer(GL_BACK);
+  GLint framebuffer = 0;  // a framebuffer object (off-screen) or the window's back buffer
+  glGetIntegerv(GL_READ_FRAMEBUFFER_BINDING, &framebuffer);
+  glReadBuffer(framebuffer != 0 ? GL_COLOR_ATTACHMENT0 : GL_BACK);
   glReadPixels(0, 0, width, height, GL_RGBA, GL_UNSIGNED_BYTE, bottom_up.data());
   std::vector<std::uint8_t> out(bottom_up.size());
   const std::size_t row = std::size_t(width) * 4;

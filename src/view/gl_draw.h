@@ -9,6 +9,7 @@
 #include <GL/glext.h>
 
 #include <array>
+#include <cstdint>
 #include <vector>
 
 #include <Eigen/Core>
@@ -19,6 +20,10 @@
 namespace ido::view::gl {
 
 using Mat4f = Eigen::Matrix4f;
+
+/// How many uploads (MeshBuffer, LineBuffer, SliceQuad) this process has made: a picture drawn
+/// from buffers is unchanged while this count is (the workbench's 3-D view cache).
+[[nodiscard]] std::uint64_t upload_count() noexcept;
 
 /// Triangles with per-vertex positions (mm), normals and colours, drawn lit by a headlight.
 class MeshBuffer {
@@ -101,7 +106,8 @@ class Painter {
   GLuint m_mesh = 0, m_lines = 0, m_slice = 0;
 };
 
-/// The window's pixels (RGBA, rows top to bottom) of a @p width × @p height framebuffer.
+/// The pixels (RGBA, rows top to bottom) of the bound @p width × @p height framebuffer: the
+/// window's back buffer, or a framebuffer object's first colour attachment.
 [[nodiscard]] std::vector<std::uint8_t> read_pixels(int width, int height);
 
 }  // namespace ido::view::gl

@@ -9,6 +9,8 @@
 
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
+#include <EGL/egl.h>
+#include <EGL/eglext.h>
 #include <imgui.h>
 #include <backends/imgui_impl_opengl3.h>
 
@@ -67,8 +69,11 @@ const Vec3 kSectionEdgeColour(0.35, 0.2, 0.05);
 const Vec3 kMaterialColour(0.9, 0.85, 0.7);  // as `ido drill --snapshots`
 const Vec3 kToolColour(0.6, 0.65, 0.75);
 const Vec3 kForceColour(1.0, 0.2, 0.9);
+const Vec3 kRoiColour(1.0, 0.55, 0.0);
 const std::array<Vec3, 4> kObjectColours = {Vec3(0.8, 0.8, 0.85), Vec3(0.55, 0.75, 0.95), Vec3(0.7, 0.9, 0.6),
                                             Vec3(0.95, 0.85, 0.5)};
+// The Deform workspace's body markers (its bodies are coloured by a field): not in viridis.
+const std::array<Vec3, 4> kBodyMarkers = {Vec3(1.0, 0.3, 0.3), Vec3(0.2, 0.9, 1.0), Vec3(1.0, 0.6, 0.1), Vec3(1.0, 0.4, 1.0)};
 const std::array<const char*, 3> kAxisNames = {"sagittal", "coronal", "axial"};
 const std::array<const char*, 3> kIndexNames = {"i", "j", "k"};
 
@@ -215,6 +220,12 @@ class Workbench {
   // set-up
   void load_files();
   void open_window();
+  void open_offscreen();
+  void init_gl();
+  /// --snapshot: waits for the workers, draws one frame off-screen and writes it.
+  void snapshot();
+  /// The views' size in points and the framebuffer's in pixels.
+  void surface_size(int& win_w, int& win_h, int& fb_w, int& fb_h) const;
   // input
   void on_input(InputEvent e);
   bool feed_script();
@@ -226,6 +237,11 @@ class Workbench {
   void shortcut(const InputEvent& e);
   // actions
   void place_mark(MarkKind kind, const Index3& voxel);
+  [[nodiscard]] segment::BalloonChoices balloon_choices() const;
+  [[nodiscard]] geometry::Aabb index_box(const geometry::Aabb& world_mm) const;
+  [[nodiscard]] geometry::Aabb roi_of_drag() const;
+  void set_roi(std::optional<geometry::Aabb> roi_mm);
+  void roi_panel();
   void restart_balloon();
   void undo_mark();
   [[nodiscard]] std::vector<Vec3> marks_mm(MarkKind kind) const;
@@ -244,6 +260,11 @@ class Workbench {
   void update_deform();
   void grab(double x_px, double y_px);
   void colour_bar();
+  /// A legend box (a colour swatch and a name per entry) at the 3-D view's top right; nothing
+  /// for fewer than two entries.
+  void legend(const std::vector<std::pair<std::string, Vec3>>& entries);
+  /// The Deform workspace's bodies named and numbered, the numbers drawn on the bodies.
+  void body_legend();
   void write_deform_log();
   void toggle_drilling();
   void start_drilling(std::unique_ptr<drill::HapticDevice> source, double max_duration_s, const std::string& what);
@@ -265,6 +286,12 @@ class Workbench {
   void mesh_panel();
   void draw(int fb_width, int fb_height);
   void draw_3d(const PixelRect& rect, double fb_scale, int fb_height);
+  /// Draws the 3-D view's content into the bound framebuffer's viewport (aspect of @p rect).
+  void render_3d(const PixelRect& rect);
+  /// Scene, Segment and Mesh: the 3-D view is drawn into m_view_cache only when what it shows
+  /// changed (camera, size, buffers, visibility, window/level, clip plane), else copied from it.
+  void draw_3d_cached(const PixelRect& rect, double fb_scale, int fb_height);
+  [[nodiscard]] std::vector<double> view_key(int w_px, int h_px) const;
   void draw_slice_view(int axis, double fb_scale, int fb_height);
   void rebuild_contours();
   void upload_slice(int axis);
@@ -293,6 +320,16 @@ class Workbench {
 
   // window and GL
   GLFWwindow* m_window = nullptr;
+  // --snapshot: an off-screen context (EGL, surfaceless) drawing into a framebuffer object
+  EGLDisplay m_egl_display = EGL_NO_DISPLAY;
+  EGLContext m_egl_context = EGL_NO_CONTEXT;
+  GLuint m_fbo = 0, m_fbo_colour = 0, m_fbo_depth = 0;
+  double m_panel_px = kPanelWidthPx;  // 0 in a snapshot: the picture is the views
+  // The 3-D view's last picture (draw_3d_cached) and what it showed.
+  GLuint m_cache_fbo = 0, m_cache_colour = 0, m_cache_depth = 0;
+  int m_cache_w = 0, m_cache_h = 0;
+  std::vector<double> m_cache_key;
+  std::int64_t m_cache_draws = 0;  // times the cached view was drawn (not copied)
   bool m_imgui = false;
   std::unique_ptr<gl::Painter> m_painter;
   std::unique_ptr<gl::MeshBuffer> m_balloon_gpu;
@@ -308,7 +345,7 @@ class Workbench {
   OrbitCamera m_camera;
   std::array<std::int64_t, 3> m_slice = {0, 0, 0};
   double m_window_width = 1, m_level = 0;
-  enum class Drag { None, Rotate, Pan, WindowLevel, Clip, Tool, Grab } m_drag = Drag::None;
+  enum class Drag { None, Rotate, Pan, WindowLevel, Clip, Tool, Grab, Roi } m_drag = Drag::None;
   double m_mouse_x = 0, m_mouse_y = 0;
   bool m_capture_mouse = false, m_capture_keyboard = false;  // ImGui's wish in the last frame
 
@@ -317,6 +354,11 @@ class Workbench {
   segment::Organ m_organ = segment::Organ::Generic;
   std::vector<Mark> m_placed;  // seeds and stop points in the order placed (ctrl+z removes the last)
   bool m_click_stops = false;  // a plain click places a stop point (shift+click always does)
+  std::optional<geometry::Aabb> m_roi_mm;  // the region of interest (world mm)
+  std::optional<double> m_max_radius_mm;   // the bound on the organ's local radius (mm)
+  bool m_drags_draw_roi = false;           // a plain drag on a slice draws the region (ctrl+drag always does)
+  int m_roi_axis = -1;                     // the slice a region is being drawn on
+  std::array<std::int64_t, 2> m_roi_from{}, m_roi_to{};  // its first and current voxel (in-plane indices)
   std::shared_ptr<const SegmentState> m_state;
   bool m_contours_dirty = true;
   int m_accepted = 0;
@@ -348,6 +390,7 @@ class Workbench {
   std::shared_ptr<const DrillSnapshot> m_drill_surface;
   std::unique_ptr<gl::MeshBuffer> m_drill_gpu, m_tool_gpu;
   std::unique_ptr<gl::LineBuffer> m_force_lines;
+  Vec3 m_force_shown_n = Vec3::Constant(NAN), m_force_at_mm = Vec3::Constant(NAN);  // what m_force_lines holds
   DrillFigures m_figures;
   std::string m_drill_summary;
   std::string m_drill_source = "mouse";  // what moved the tool of the last session: mouse, path:FILE, udp:PORT
@@ -356,6 +399,7 @@ class Workbench {
   // deformation
   std::unique_ptr<DeformSession> m_deform;
   std::vector<BodySurface> m_body_surfaces;
+  std::vector<std::string> m_body_names;
   std::vector<Vec3> m_rest_positions;
   std::shared_ptr<const DeformState> m_deform_state;
   std::unique_ptr<gl::MeshBuffer> m_deform_gpu;
@@ -379,7 +423,8 @@ class Workbench {
 };
 
 Workbench::Workbench(const WorkbenchOptions& options)
-    : m_options(options), m_organ(options.organ), m_tet_edge_mm(options.tet_edge_mm) {
+    : m_options(options), m_organ(options.organ), m_roi_mm(options.roi_mm), m_max_radius_mm(options.max_radius_mm),
+      m_tet_edge_mm(options.tet_edge_mm) {
   check_segment_outputs(m_options.segment_outputs);
   if (!m_options.tet_output.empty() && !io::is_tet_mesh_path(m_options.tet_output))
     throw InvalidInput(fmt::format("--tet-output {}: must be a .vtu, .msh or .node file", m_options.tet_output.string()));
@@ -417,6 +462,13 @@ Workbench::Workbench(const WorkbenchOptions& options)
         throw InvalidInput(fmt::format("{} {},{},{}: outside the {}x{}x{} volume", option, v[0], v[1], v[2],
                                        m_ct->size(0), m_ct->size(1), m_ct->size(2)));
   }
+  if (m_roi_mm || m_max_radius_mm) {
+    if (!m_ct) throw InvalidInput(m_roi_mm ? "--roi needs a volume to segment" : "--max-radius needs a volume to segment");
+    // Refused as the library refuses them, naming the flag.
+    (void)segment::balloon_options(balloon_choices(), [](std::string_view field) {
+      return std::string(field == "roi" ? "--roi" : field == "max_radius_mm" ? "--max-radius" : field);
+    });
+  }
   if (m_options.drill_udp_port < 0 || m_options.drill_udp_port > 65535)
     throw InvalidInput(fmt::format("--drill-udp {}: a UDP port is 0..65535 (0: any free port)", m_options.drill_udp_port));
   if (!m_options.drill_replay.empty()) {
@@ -424,7 +476,11 @@ Workbench::Workbench(const WorkbenchOptions& options)
     const std::string p = m_options.drill_replay.string();
     std::copy_n(p.begin(), std::min(p.size(), m_replay_path.size() - 1), m_replay_path.begin());
   }
-  open_window();
+  if (m_options.snapshot.empty())
+    open_window();
+  else
+    open_offscreen();
+  init_gl();
 }
 
 Workbench::~Workbench() {
@@ -454,8 +510,23 @@ Workbench::~Workbench() {
     ImGui_ImplOpenGL3_Shutdown();
     ImGui::DestroyContext();
   }
+  if (m_cache_fbo) {
+    glDeleteFramebuffers(1, &m_cache_fbo);
+    glDeleteRenderbuffers(1, &m_cache_colour);
+    glDeleteRenderbuffers(1, &m_cache_depth);
+  }
+  if (m_fbo) {
+    glDeleteFramebuffers(1, &m_fbo);
+    glDeleteRenderbuffers(1, &m_fbo_colour);
+    glDeleteRenderbuffers(1, &m_fbo_depth);
+  }
+  if (m_egl_display != EGL_NO_DISPLAY) {
+    eglMakeCurrent(m_egl_display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+    if (m_egl_context != EGL_NO_CONTEXT) eglDestroyContext(m_egl_display, m_egl_context);
+    eglTerminate(m_egl_display);
+  }
   if (m_window) glfwDestroyWindow(m_window);
-  glfwTerminate();
+  if (m_options.snapshot.empty()) glfwTerminate();
 }
 
 void Workbench::say(const std::string& text) {
@@ -481,7 +552,10 @@ void Workbench::load_files() {
       }
       if (!m_deform && !scene.bodies.empty()) {  // the first scene is the Deform workspace's
         m_rest_positions = scene.world.particles().positions();
-        for (const io::SceneBody& b : scene.bodies) m_body_surfaces.push_back(body_surface(b));
+        for (const io::SceneBody& b : scene.bodies) {
+          m_body_surfaces.push_back(body_surface(b));
+          m_body_names.push_back(b.name);
+        }
         m_deform = std::make_unique<DeformSession>(f);  // keeps the file's text: its parameters can change
         m_deform_state = m_deform->latest();
         for (const SceneParameter& p : m_deform->parameters()) m_parameter_edit.push_back(p.value);
@@ -586,7 +660,54 @@ void Workbench::open_window() {
     e.codepoint = c;
     static_cast<Workbench*>(glfwGetWindowUserPointer(w))->on_input(e);
   });
+}
 
+void Workbench::open_offscreen() {
+  // Mesa's surfaceless platform: an OpenGL 3.3 core context with no display and no window,
+  // drawing into a framebuffer object. libGL's functions dispatch to it (GLVND).
+  m_panel_px = 0.0;
+  const auto fail = [](const char* what) {
+    return Error(fmt::format("--snapshot: no off-screen OpenGL 3.3 context ({}; EGL error 0x{:x})", what, eglGetError()));
+  };
+  const auto get_platform_display =
+      reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(eglGetProcAddress("eglGetPlatformDisplayEXT"));
+  if (!get_platform_display) throw fail("EGL has no eglGetPlatformDisplayEXT");
+  m_egl_display = get_platform_display(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
+  EGLint major = 0, minor = 0;
+  if (m_egl_display == EGL_NO_DISPLAY || !eglInitialize(m_egl_display, &major, &minor)) {
+    m_egl_display = EGL_NO_DISPLAY;
+    throw fail("Mesa's surfaceless platform");
+  }
+  if (!eglBindAPI(EGL_OPENGL_API)) throw fail("desktop OpenGL");
+  const EGLint context_attributes[] = {EGL_CONTEXT_MAJOR_VERSION, 3, EGL_CONTEXT_MINOR_VERSION, 3,
+                                       EGL_CONTEXT_OPENGL_PROFILE_MASK, EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, EGL_NONE};
+  m_egl_context = eglCreateContext(m_egl_display, EGL_NO_CONFIG_KHR, EGL_NO_CONTEXT, context_attributes);
+  if (m_egl_context == EGL_NO_CONTEXT) throw fail("context");
+  if (!eglMakeCurrent(m_egl_display, EGL_NO_SURFACE, EGL_NO_SURFACE, m_egl_context)) throw fail("make current");
+  glGenFramebuffers(1, &m_fbo);
+  glGenRenderbuffers(1, &m_fbo_colour);
+  glGenRenderbuffers(1, &m_fbo_depth);
+  glBindFramebuffer(GL_FRAMEBUFFER, m_fbo);
+  glBindRenderbuffer(GL_RENDERBUFFER, m_fbo_colour);
+  glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, m_options.width_px, m_options.height_px);
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, m_fbo_colour);
+  glBindRenderbuffer(GL_RENDERBUFFER, m_fbo_depth);
+  glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, m_options.width_px, m_options.height_px);
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, m_fbo_depth);
+  if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) throw fail("framebuffer");
+}
+
+void Workbench::surface_size(int& win_w, int& win_h, int& fb_w, int& fb_h) const {
+  if (!m_window) {
+    win_w = fb_w = m_options.width_px;
+    win_h = fb_h = m_options.height_px;
+    return;
+  }
+  glfwGetWindowSize(m_window, &win_w, &win_h);
+  glfwGetFramebufferSize(m_window, &fb_w, &fb_h);
+}
+
+void Workbench::init_gl() {
   IMGUI_CHECKVERSION();
   ImGui::CreateContext();
   m_imgui = true;
@@ -822,6 +943,17 @@ void Workbench::view_mouse_move(const InputEvent& e) {
       m_deform->set_grab(m_grab);
       break;
     }
+    case Drag::Roi: {
+      const auto& view = m_slice_views[std::size_t(m_roi_axis)];
+      if (!view) break;
+      const PixelRect& r = view->rect();  // the cursor held inside the slice: the region stays in the volume
+      const double x = std::clamp(e.x_px, r.x, r.x + r.width - 1), y = std::clamp(e.y_px, r.y, r.y + r.height - 1);
+      if (const auto uv = view->voxel_at(x, y); uv && *uv != m_roi_to) {
+        m_roi_to = *uv;
+        m_contours_dirty = true;
+      }
+      break;
+    }
     case Drag::None: break;
   }
 }
@@ -846,6 +978,13 @@ void Workbench::view_mouse_down(const InputEvent& e) {
     if (!v || !v->rect().contains(e.x_px, e.y_px)) continue;
     if (e.button == 1) {
       m_drag = Drag::WindowLevel;
+    } else if (e.button == 0 && (e.ctrl || m_drags_draw_roi)) {  // draw the region of interest
+      if (const auto uv = v->voxel_at(e.x_px, e.y_px)) {
+        m_drag = Drag::Roi;
+        m_roi_axis = a;
+        m_roi_from = m_roi_to = *uv;
+        m_contours_dirty = true;
+      }
     } else if (e.button == 0) {
       if (const auto uv = v->voxel_at(e.x_px, e.y_px)) {
         Index3 voxel;
@@ -859,6 +998,12 @@ void Workbench::view_mouse_down(const InputEvent& e) {
 }
 
 void Workbench::view_mouse_up(const InputEvent&) {
+  if (m_drag == Drag::Roi && m_ct) {
+    m_drag = Drag::None;
+    set_roi(roi_of_drag());
+    m_roi_axis = -1;
+    return;
+  }
   if (m_drag == Drag::Grab) {  // released: the spring goes, the body springs back
     m_grab.active = false;
     m_deform->set_grab(m_grab);
@@ -893,7 +1038,7 @@ void Workbench::shortcut(const InputEvent& e) {
   if (k == "f4") m_select_tab = Workspace::Drill;
   if (k == "f5") m_select_tab = Workspace::Deform;
   if (k == "r" && !e.ctrl) frame_camera();
-  if (k == "q" && e.ctrl) glfwSetWindowShouldClose(m_window, GLFW_TRUE);
+  if (k == "q" && e.ctrl && m_window) glfwSetWindowShouldClose(m_window, GLFW_TRUE);
   if (m_workspace == Workspace::Deform && m_deform) {
     if (k == "space") m_deform->set_running(!m_deform->running());
     if (k == "n" && !e.ctrl) m_deform->step_once();
@@ -937,6 +1082,7 @@ void Workbench::shortcut(const InputEvent& e) {
   if (k == "n" && !e.ctrl) step_once();
   if (k == "z" && e.ctrl) undo_mark();
   if (k == "x" && !e.ctrl) m_click_stops = !m_click_stops;
+  if (k == "o" && !e.ctrl) m_drags_draw_roi = !m_drags_draw_roi;
   if (k == "enter" || k == "keypad_enter") accept();
   if (k == "s" && e.ctrl) save();
   if (k == "page_up" || k == "page_down") set_slice(2, m_slice[2] + (k == "page_up" ? 1 : -1));
@@ -963,12 +1109,70 @@ std::vector<Vec3> Workbench::marks_mm(MarkKind kind) const {
   return out;
 }
 
+segment::BalloonChoices Workbench::balloon_choices() const {
+  segment::BalloonChoices choices;  // what the panel says, as `ido segment`'s flags fill it
+  choices.organ = m_organ;
+  if (m_ct) choices.stop_points_mm = marks_mm(MarkKind::Stop);
+  choices.roi_mm = m_roi_mm;
+  choices.max_radius_mm = m_max_radius_mm;
+  return choices;
+}
+
+geometry::Aabb Workbench::index_box(const geometry::Aabb& world_mm) const {
+  geometry::Aabb box;  // continuous voxel indices of the box's corners
+  for (int c = 0; c < 8; ++c)
+    box.extend(m_ct->world_to_index(Vec3((c & 1) ? world_mm.max.x() : world_mm.min.x(), (c & 2) ? world_mm.max.y() : world_mm.min.y(),
+                                         (c & 4) ? world_mm.max.z() : world_mm.min.z())));
+  return box;
+}
+
+geometry::Aabb Workbench::roi_of_drag() const {
+  // The voxels from the first to the current one on the slice, edge to edge; across the slice
+  // the region keeps its extent (the whole volume when there was none).
+  const SliceView shape(m_roi_axis, m_ct->size(), m_ct->spacing(), {0, 0, 1, 1});
+  const int a = m_roi_axis, u = shape.u_axis(), v = shape.v_axis();
+  Vec3 lo, hi;
+  lo[u] = double(std::min(m_roi_from[0], m_roi_to[0])) - 0.5;
+  hi[u] = double(std::max(m_roi_from[0], m_roi_to[0])) + 0.5;
+  lo[v] = double(std::min(m_roi_from[1], m_roi_to[1])) - 0.5;
+  hi[v] = double(std::max(m_roi_from[1], m_roi_to[1])) + 0.5;
+  lo[a] = -0.5;
+  hi[a] = double(m_ct->size(a)) - 0.5;
+  if (m_roi_mm) {
+    const geometry::Aabb old = index_box(*m_roi_mm);
+    lo[a] = std::max(lo[a], old.min[a]);
+    hi[a] = std::min(hi[a], old.max[a]);
+    if (!(lo[a] < hi[a])) {  // the old region lies outside the volume along this axis
+      lo[a] = -0.5;
+      hi[a] = double(m_ct->size(a)) - 0.5;
+    }
+  }
+  geometry::Aabb world;
+  for (int c = 0; c < 8; ++c)
+    world.extend(m_ct->index_to_world(Vec3((c & 1) ? hi.x() : lo.x(), (c & 2) ? hi.y() : lo.y(), (c & 4) ? hi.z() : lo.z())));
+  return world;
+}
+
+void Workbench::set_roi(std::optional<geometry::Aabb> roi_mm) {
+  m_roi_mm = std::move(roi_mm);
+  if (m_roi_mm)
+    say(fmt::format("region of interest ({:.2f}, {:.2f}, {:.2f}) - ({:.2f}, {:.2f}, {:.2f}) mm", m_roi_mm->min.x(),
+                    m_roi_mm->min.y(), m_roi_mm->min.z(), m_roi_mm->max.x(), m_roi_mm->max.y(), m_roi_mm->max.z()));
+  else
+    say("region of interest cleared");
+  m_contours_dirty = true;
+  restart_balloon();
+}
+
 void Workbench::restart_balloon() {
   if (!m_session) return;
-  segment::BalloonChoices choices;
-  choices.organ = m_organ;
-  choices.stop_points_mm = marks_mm(MarkKind::Stop);
-  const segment::BalloonOptions options = segment::balloon_options(choices);
+  segment::BalloonOptions options;
+  try {
+    options = segment::balloon_options(balloon_choices());
+  } catch (const InvalidInput& e) {  // a value the panel let through that the library refuses
+    say(std::string("not started: ") + e.what());
+    return;
+  }
   const bool paused = m_session->paused();
   m_session->start(marks_mm(MarkKind::Seed), options, paused);
   m_contours_dirty = true;
@@ -1180,6 +1384,12 @@ void Workbench::rebuild_contours() {
     idx.reserve(surface->vertices.size());
     for (const Vec3& p : surface->vertices) idx.push_back(m_ct->world_to_index(p));
   }
+  // The region of interest in voxel indices (the one being drawn, else the one set).
+  std::optional<geometry::Aabb> roi;
+  if (m_drag == Drag::Roi && m_roi_axis >= 0)
+    roi = index_box(roi_of_drag());
+  else if (m_roi_mm)
+    roi = index_box(*m_roi_mm);
   for (int a = 0; a < 3; ++a) {
     const SliceView shape(a, m_ct->size(), m_ct->spacing(), {0, 0, 1, 1});
     const int u = shape.u_axis(), v = shape.v_axis();
@@ -1221,9 +1431,28 @@ void Workbench::rebuild_contours() {
         marks.add(Vec3(su - r, sw + r, 0), Vec3(su + r, sw - r, 0), kStopColour);
       }
     }
+    if (roi) {  // the region's rectangle where this slice crosses it
+      const geometry::Aabb& b = *roi;
+      if (double(m_slice[std::size_t(a)]) >= b.min[a] && double(m_slice[std::size_t(a)]) <= b.max[a]) {
+        const Vec3 p00(b.min[u], b.min[v], 0), p10(b.max[u], b.min[v], 0), p11(b.max[u], b.max[v], 0), p01(b.min[u], b.max[v], 0);
+        marks.add(p00, p10, kRoiColour);
+        marks.add(p10, p11, kRoiColour);
+        marks.add(p11, p01, kRoiColour);
+        marks.add(p01, p00, kRoiColour);
+      }
+    }
     marks.upload();
   }
   m_marks_3d->clear();
+  if (roi) {  // the region's twelve edges in the 3-D view
+    const geometry::Aabb& b = *roi;
+    auto corner = [&](int c) {
+      return m_ct->index_to_world(Vec3((c & 1) ? b.max.x() : b.min.x(), (c & 2) ? b.max.y() : b.min.y(), (c & 4) ? b.max.z() : b.min.z()));
+    };
+    for (int c = 0; c < 8; ++c)
+      for (int bit : {1, 2, 4})
+        if (!(c & bit)) m_marks_3d->add(corner(c), corner(c | bit), kRoiColour);
+  }
   const double r = 3.0 * m_ct->spacing().minCoeff();
   for (const Mark& m : m_placed) {
     const Vec3 w = m_ct->index_to_world(Vec3(double(m.voxel[0]), double(m.voxel[1]), double(m.voxel[2])));
@@ -1234,7 +1463,7 @@ void Workbench::rebuild_contours() {
 }
 
 void Workbench::layout(double width, double height) {
-  m_view_area = {kPanelWidthPx, 0, std::max(1.0, width - kPanelWidthPx), height};
+  m_view_area = {m_panel_px, 0, std::max(1.0, width - m_panel_px), height};
   const PixelRect& a = m_view_area;
   if (m_workspace == Workspace::Segment && m_ct) {
     const double hw = std::floor(a.width / 2), hh = std::floor(a.height / 2);
@@ -1288,9 +1517,13 @@ void Workbench::update_from_workers() {
         draw_tool(pose);
       }
     }
-    m_force_lines->clear();
-    m_force_lines->add(m_tool_mm, m_tool_mm + 2.0 * m_figures.force_n, kForceColour);  // 2 mm per newton
-    m_force_lines->upload();
+    if (m_figures.force_n != m_force_shown_n || m_tool_mm != m_force_at_mm) {
+      m_force_shown_n = m_figures.force_n;
+      m_force_at_mm = m_tool_mm;
+      m_force_lines->clear();
+      m_force_lines->add(m_tool_mm, m_tool_mm + 2.0 * m_figures.force_n, kForceColour);  // 2 mm per newton
+      m_force_lines->upload();
+    }
     if (m_drill->started() && m_drill->ended() && !m_drill_reported && m_drill_surface && m_drill_surface->final) drill_ended();
   }
   if (m_deform) update_deform();
@@ -1344,6 +1577,7 @@ void Workbench::panel() {
       ImGui::Separator();
       ImGui::TextWrapped("click a slice: a seed (green +); shift+click: a stop point (blue x), which the front does not pass");
       ImGui::Checkbox("clicks place stop points (x)", &m_click_stops);
+      roi_panel();
       int seeds = 0, stops = 0;
       for (const Mark& m : m_placed) {
         const Index3& v = m.voxel;
@@ -1399,6 +1633,44 @@ void Workbench::panel() {
     ImGui::TextDisabled("frame %.1f ms (median of %zu)", ms[ms.size() / 2], ms.size());
   }
   ImGui::End();
+}
+
+void Workbench::roi_panel() {
+  ImGui::Separator();
+  ImGui::TextWrapped("region of interest (the balloon deflates outside it): ctrl+drag on a slice");
+  ImGui::Checkbox("drags draw the region (o)", &m_drags_draw_roi);
+  if (m_roi_mm) {
+    std::array<float, 3> lo = {float(m_roi_mm->min.x()), float(m_roi_mm->min.y()), float(m_roi_mm->min.z())};
+    std::array<float, 3> hi = {float(m_roi_mm->max.x()), float(m_roi_mm->max.y()), float(m_roi_mm->max.z())};
+    const float step = float(0.25 * m_ct->spacing().minCoeff());
+    ImGui::DragFloat3("min (mm)", lo.data(), step, 0.0f, 0.0f, "%.1f");
+    const bool lo_done = ImGui::IsItemDeactivatedAfterEdit();
+    ImGui::DragFloat3("max (mm)", hi.data(), step, 0.0f, 0.0f, "%.1f");
+    const bool hi_done = ImGui::IsItemDeactivatedAfterEdit();
+    if (lo_done || hi_done) {  // applied when the field is let go: one balloon restart per edit
+      geometry::Aabb b{Vec3(lo[0], lo[1], lo[2]), Vec3(hi[0], hi[1], hi[2])};
+      if ((b.min.array() < b.max.array()).all())
+        set_roi(b);
+      else
+        say("the region's minimum must be below its maximum on every axis");
+    }
+    if (ImGui::Button("Clear region")) set_roi(std::nullopt);
+  } else {
+    ImGui::TextDisabled("none");
+  }
+  bool bounded = m_max_radius_mm.has_value();
+  if (ImGui::Checkbox("bound the local radius", &bounded)) {
+    m_max_radius_mm = bounded ? std::optional<double>(10.0 * m_ct->spacing().maxCoeff()) : std::nullopt;
+    restart_balloon();
+  }
+  if (m_max_radius_mm) {
+    double r = *m_max_radius_mm;
+    if (ImGui::InputDouble("max radius (mm)", &r, 0.5, 2.0, "%.2f", ImGuiInputTextFlags_EnterReturnsTrue) && r > 0 &&
+        std::isfinite(r) && r != *m_max_radius_mm) {
+      m_max_radius_mm = r;
+      restart_balloon();
+    }
+  }
 }
 
 void Workbench::mesh_panel() {
@@ -1884,11 +2156,76 @@ void Workbench::write_deform_log() {
   write_file_atomically(m_options.deform_log, [&](std::ostream& out) { out << text; }, false);
 }
 
+void Workbench::legend(const std::vector<std::pair<std::string, Vec3>>& entries) {
+  if (entries.size() < 2) return;
+  ImDrawList* dl = ImGui::GetForegroundDrawList();
+  const float line = ImGui::GetTextLineHeight() + 4.0f, swatch = 12.0f;
+  float text_w = 0.0f;
+  for (const auto& [name, colour] : entries) text_w = std::max(text_w, ImGui::CalcTextSize(name.c_str()).x);
+  text_w = std::min(text_w, float(0.5 * m_rect_3d.width));  // long names are cut at the box
+  const float x1 = float(m_rect_3d.x + m_rect_3d.width) - 8.0f, x0 = x1 - (text_w + swatch + 18.0f);
+  const float y0 = float(m_rect_3d.y) + 48.0f, y1 = y0 + float(entries.size()) * line + 6.0f;
+  dl->AddRectFilled(ImVec2(x0, y0), ImVec2(x1, y1), IM_COL32(18, 18, 22, 230));
+  dl->AddRect(ImVec2(x0, y0), ImVec2(x1, y1), IM_COL32(140, 140, 140, 255));
+  dl->PushClipRect(ImVec2(x0, y0), ImVec2(x1 - 4.0f, y1), true);
+  for (std::size_t i = 0; i < entries.size(); ++i) {
+    const Vec3& c = entries[i].second;
+    const float y = y0 + 4.0f + float(i) * line;
+    dl->AddRectFilled(ImVec2(x0 + 6.0f, y + 1.0f), ImVec2(x0 + 6.0f + swatch, y + 1.0f + swatch),
+                      IM_COL32(int(255 * c.x()), int(255 * c.y()), int(255 * c.z()), 255));
+    dl->AddText(ImVec2(x0 + swatch + 12.0f, y), IM_COL32(230, 230, 230, 255), entries[i].first.c_str());
+  }
+  dl->PopClipRect();
+}
+
+void Workbench::body_legend() {
+  if (m_body_surfaces.size() < 2 || !m_deform_state) return;
+  std::vector<std::pair<std::string, Vec3>> entries;
+  ImDrawList* dl = ImGui::GetForegroundDrawList();
+  const viz::Camera cam = m_camera.camera();
+  const Mat4 mvp = cam.projection_matrix(m_rect_3d.width / std::max(1.0, m_rect_3d.height)) * cam.view_matrix();
+  for (std::size_t b = 0; b < m_body_surfaces.size(); ++b) {
+    const Vec3& colour = kBodyMarkers[b % kBodyMarkers.size()];
+    entries.emplace_back(fmt::format("{}  {}", b + 1, m_body_names[b]), colour);
+    // The body's number on its boundary's centre as the camera sees it now.
+    Vec3 centre = Vec3::Zero();
+    std::size_t n = 0;
+    for (const Tri& f : m_body_surfaces[b].faces)
+      for (std::int32_t vi : f) {
+        centre += m_deform_state->positions_mm[std::size_t(vi)];
+        ++n;
+      }
+    if (n == 0) continue;
+    const Vec4 clip = mvp * Vec4(centre.x() / double(n), centre.y() / double(n), centre.z() / double(n), 1.0);
+    if (clip.w() <= 0) continue;
+    const float x = float(m_rect_3d.x + (clip.x() / clip.w() + 1.0) / 2.0 * m_rect_3d.width);
+    const float y = float(m_rect_3d.y + (1.0 - clip.y() / clip.w()) / 2.0 * m_rect_3d.height);
+    const std::string label = std::to_string(b + 1);
+    const ImVec2 size = ImGui::CalcTextSize(label.c_str());
+    const ImU32 col = IM_COL32(int(255 * colour.x()), int(255 * colour.y()), int(255 * colour.z()), 255);
+    dl->AddRectFilled(ImVec2(x - size.x / 2 - 4, y - size.y / 2 - 2), ImVec2(x + size.x / 2 + 4, y + size.y / 2 + 2), col, 3.0f);
+    dl->AddText(ImVec2(x - size.x / 2, y - size.y / 2), IM_COL32(0, 0, 0, 255), label.c_str());
+  }
+  legend(entries);
+}
+
 void Workbench::overlays() {
-  if (m_workspace == Workspace::Deform && m_deform) colour_bar();
+  if (m_workspace == Workspace::Deform && m_deform) {
+    colour_bar();
+    body_legend();
+  }
+  if (m_workspace == Workspace::Scene || m_workspace == Workspace::Segment) {  // what the 3-D view shows, by colour
+    std::vector<std::pair<std::string, Vec3>> entries;
+    for (const auto& o : m_objects)
+      if (o.visible) entries.emplace_back(o.name, o.colour);
+    if (m_workspace == Workspace::Segment && m_state && !m_state->surface.triangles.empty() && !entries.empty())
+      entries.emplace_back("balloon", kBalloonColour);
+    legend(entries);
+  }
   ImDrawList* dl = ImGui::GetForegroundDrawList();
   const ImU32 white = IM_COL32(230, 230, 230, 255);
-  dl->AddText(ImVec2(float(m_rect_3d.x + 6), float(m_rect_3d.y + 4)), white, "3-D  (drag: turn, right-drag: move, wheel: zoom)");
+  if (m_window)  // a snapshot has no mouse
+    dl->AddText(ImVec2(float(m_rect_3d.x + 6), float(m_rect_3d.y + 4)), white, "3-D  (drag: turn, right-drag: move, wheel: zoom)");
   for (int a = 0; a < 3; ++a) {
     const auto& v = m_slice_views[std::size_t(a)];
     if (!v) continue;
@@ -1922,6 +2259,67 @@ void Workbench::draw_slice_view(int axis, double fb_scale, int fb_height) {
 
 void Workbench::draw_3d(const PixelRect& r, double fb_scale, int fb_height) {
   clip_to(r, fb_scale, fb_height);
+  render_3d(r);
+}
+
+std::vector<double> Workbench::view_key(int w_px, int h_px) const {
+  const viz::Camera cam = m_camera.camera();
+  const Mat4 view = cam.view_matrix(), projection = cam.projection_matrix(m_rect_3d.width / std::max(1.0, m_rect_3d.height));
+  std::vector<double> key = {double(static_cast<int>(m_workspace)), double(w_px), double(h_px),
+                             double(gl::upload_count()), m_window_width, m_level, double(m_mesh_source),
+                             m_mesh ? 1.0 : 0.0, double(m_objects.size())};
+  key.insert(key.end(), view.data(), view.data() + 16);
+  key.insert(key.end(), projection.data(), projection.data() + 16);
+  for (const auto& o : m_objects) key.push_back(o.visible ? 1.0 : 0.0);
+  if (m_workspace == Workspace::Mesh && m_mesh) {
+    const viz::ClipPlane p = clip_plane();
+    key.insert(key.end(), {p.normal.x(), p.normal.y(), p.normal.z(), p.point.x(), p.point.y(), p.point.z()});
+  }
+  return key;
+}
+
+void Workbench::draw_3d_cached(const PixelRect& r, double fb_scale, int fb_height) {
+  clip_to(r, fb_scale, fb_height);  // the view's pixels in the target framebuffer
+  GLint target[4] = {0, 0, 0, 0};
+  glGetIntegerv(GL_VIEWPORT, target);
+  const int w = target[2], h = target[3];
+  if (w <= 0 || h <= 0) return;
+  if (!m_cache_fbo) {
+    glGenFramebuffers(1, &m_cache_fbo);
+    glGenRenderbuffers(1, &m_cache_colour);
+    glGenRenderbuffers(1, &m_cache_depth);
+  }
+  const GLuint shown = m_fbo;  // the window's framebuffer (0) or the snapshot's
+  if (w != m_cache_w || h != m_cache_h) {
+    glBindRenderbuffer(GL_RENDERBUFFER, m_cache_colour);
+    glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, w, h);
+    glBindRenderbuffer(GL_RENDERBUFFER, m_cache_depth);
+    glRenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT24, w, h);
+    glBindFramebuffer(GL_FRAMEBUFFER, m_cache_fbo);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, m_cache_colour);
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, m_cache_depth);
+    glBindFramebuffer(GL_FRAMEBUFFER, shown);
+    m_cache_w = w;
+    m_cache_h = h;
+    m_cache_key.clear();
+  }
+  std::vector<double> key = view_key(w, h);
+  if (key != m_cache_key) {
+    glBindFramebuffer(GL_FRAMEBUFFER, m_cache_fbo);
+    glViewport(0, 0, w, h);
+    glScissor(0, 0, w, h);
+    render_3d(r);
+    glBindFramebuffer(GL_FRAMEBUFFER, shown);
+    clip_to(r, fb_scale, fb_height);
+    m_cache_key = std::move(key);
+    ++m_cache_draws;
+  }
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, m_cache_fbo);
+  glBlitFramebuffer(0, 0, w, h, target[0], target[1], target[0] + w, target[1] + h, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+  glBindFramebuffer(GL_FRAMEBUFFER, shown);
+}
+
+void Workbench::render_3d(const PixelRect& r) {
   glClearColor(0.12f, 0.13f, 0.16f, 1);
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
   glEnable(GL_DEPTH_TEST);
@@ -1976,31 +2374,64 @@ void Workbench::draw_3d(const PixelRect& r, double fb_scale, int fb_height) {
 }
 
 void Workbench::draw(int fb_width, int fb_height) {
-  int win_w = 0, win_h = 0;
-  glfwGetWindowSize(m_window, &win_w, &win_h);
+  int win_w = 0, win_h = 0, unused_w = 0, unused_h = 0;
+  surface_size(win_w, win_h, unused_w, unused_h);
   const double scale = win_w > 0 ? double(fb_width) / win_w : 1.0;
   glEnable(GL_SCISSOR_TEST);
   glViewport(0, 0, fb_width, fb_height);
   glScissor(0, 0, fb_width, fb_height);
   glClearColor(0.08f, 0.08f, 0.09f, 1);
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-  draw_3d(m_rect_3d, scale, fb_height);
+  if (m_workspace == Workspace::Drill || m_workspace == Workspace::Deform)  // they change every frame
+    draw_3d(m_rect_3d, scale, fb_height);
+  else
+    draw_3d_cached(m_rect_3d, scale, fb_height);
   for (int a = 0; a < 3; ++a)
     if (m_slice_views[std::size_t(a)]) draw_slice_view(a, scale, fb_height);
   glDisable(GL_SCISSOR_TEST);
   glViewport(0, 0, fb_width, fb_height);
 }
 
+void Workbench::snapshot() {
+  // Work started at open (the seeds' balloon) finishes first, so the picture shows its result.
+  const Clock::time_point t0 = Clock::now();
+  while (m_session && m_session->busy()) {
+    if (Clock::now() - t0 > std::chrono::minutes(10)) throw Error("--snapshot: the balloon did not finish in 10 minutes");
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  ImGuiIO& io = ImGui::GetIO();
+  const int w = m_options.width_px, h = m_options.height_px;
+  io.DisplaySize = ImVec2(float(w), float(h));
+  io.DisplayFramebufferScale = ImVec2(1.0f, 1.0f);
+  io.DeltaTime = 1.0f / 60.0f;
+  layout(w, h);
+  update_from_workers();
+  ImGui_ImplOpenGL3_NewFrame();
+  ImGui::NewFrame();
+  overlays();
+  ImGui::Render();
+  draw(w, h);
+  ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+  glFinish();
+  viz::write_png(m_options.snapshot, viz::Image{w, h, gl::read_pixels(w, h)});
+  m_stats.frames.push_back({m_workspace, float(std::chrono::duration<double, std::milli>(Clock::now() - t0).count()), false, true});
+  if (!m_options.quiet) std::printf("wrote %s\n", m_options.snapshot.string().c_str());
+}
+
 void Workbench::run() {
+  if (!m_options.snapshot.empty()) {
+    snapshot();
+    return;
+  }
   ImGuiIO& io = ImGui::GetIO();
   for (;;) {
     const Clock::time_point frame_start = Clock::now();
+    const std::int64_t cache_draws_before = m_cache_draws;
     glfwPollEvents();
     if (glfwWindowShouldClose(m_window)) break;
     if (m_script && !feed_script()) break;
     int win_w = 0, win_h = 0, fb_w = 0, fb_h = 0;
-    glfwGetWindowSize(m_window, &win_w, &win_h);
-    glfwGetFramebufferSize(m_window, &fb_w, &fb_h);
+    surface_size(win_w, win_h, fb_w, fb_h);
     io.DisplaySize = ImVec2(float(win_w), float(win_h));
     if (win_w > 0) io.DisplayFramebufferScale = ImVec2(float(fb_w) / float(win_w), float(fb_h) / float(win_h));
     const Clock::time_point now = Clock::now();
@@ -2038,8 +2469,9 @@ void Workbench::run() {
     // While drilling, at most 60 frames a second (a display's rate), so the frame loop and the
     // software rasteriser do not take the collision thread's processor.
     if (drilling()) std::this_thread::sleep_until(frame_start + std::chrono::microseconds(16667));
-    m_stats.frames.push_back(
-        {m_workspace, float(std::chrono::duration<double, std::milli>(Clock::now() - frame_start).count()), waiting});
+    m_stats.frames.push_back({m_workspace, float(std::chrono::duration<double, std::milli>(Clock::now() - frame_start).count()),
+                              waiting, m_cache_draws != cache_draws_before || m_workspace == Workspace::Drill ||
+                                           m_workspace == Workspace::Deform});
     if (m_options.max_frames > 0 && m_frame >= m_options.max_frames) break;
   }
   write_deform_log();

@@ -8,7 +8,9 @@
 // a shift-click places a stop point the balloon stops at as segment_balloon() does (and ctrl+z
 // takes one back); a Young's modulus typed into the Deform panel continues the run as the library
 // does with that modulus from that step on; a path CSV replayed in the Drill workspace removes
-// what `ido drill` removes on it.
+// what `ido drill` removes on it; a region of interest drawn on the slices gives `ido segment
+// --roi`'s surface and shows on them; several bodies in the Deform workspace get a legend and
+// their numbers; `--snapshot` draws what was opened without a display, with a legend.
 
 #include <algorithm>
 #include <array>
@@ -100,6 +102,11 @@ nlohmann::json mouse(std::int64_t frame, const char* type, double x, double y) {
   e["y"] = y;
   return e;
 }
+nlohmann::json ctrl_mouse(std::int64_t frame, const char* type, double x, double y) {
+  nlohmann::json e = mouse(frame, type, x, y);
+  e["ctrl"] = true;
+  return e;
+}
 nlohmann::json key(std::int64_t frame, const char* type, const char* name, bool ctrl) {
   nlohmann::json e = event(frame, type);
   e["key"] = name;
@@ -115,6 +122,28 @@ nlohmann::json wait(std::int64_t frame, const char* until) {
 
 void write_script(const fs::path& path, const nlohmann::json& events) {
   std::ofstream(path) << nlohmann::json{{"window", {kWidth, kHeight}}, {"events", events}}.dump(1);
+}
+
+/// Runs `ido view ARGS` with no display at all (no DISPLAY, no Xvfb): --snapshot.
+test::CommandResult run_headless(const std::string& args, const fs::path& dir) {
+  const fs::path out = dir / "view-out.txt", err = dir / "view-err.txt";
+  const fs::path supp = test::source_dir() / "tests" / "sanitizer" / "lsan-view.supp";
+  const std::string cmd = fmt::format(
+      "env -u DISPLAY -u WAYLAND_DISPLAY LSAN_OPTIONS=suppressions={}:print_suppressions=0:intercept_tls_get_addr=0 {} view {} "
+      ">{} 2>{} </dev/null",
+      supp.string(), test::tool_path().string(), args, out.string(), err.string());
+  const int status = std::system(cmd.c_str());
+  test::CommandResult r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = slurp(out);
+  r.err = slurp(err);
+  return r;
+}
+
+/// True when pixel (r, g, b) is @p rgb (0..1) as 8 bits, within 2 levels.
+bool is_colour(int r, int g, int b, const Vec3& rgb) {
+  return std::abs(r - int(std::lround(255 * rgb.x()))) <= 2 && std::abs(g - int(std::lround(255 * rgb.y()))) <= 2 &&
+         std::abs(b - int(std::lround(255 * rgb.z()))) <= 2;
 }
 
 /// Pixels of @p png inside @p r for which @p pred(r, g, b) holds.
@@ -771,6 +800,156 @@ TEST_F(ViewWindow, DeviceOverTheUdpBridgeDrillsAndItsRecordedPathReplaysInIdoDri
   EXPECT_TRUE(test::rel_near(removed, replayed, 0.02)) << removed << " vs " << replayed;
 }
 
+TEST_F(ViewWindow, RegionOfInterestDrawnOnTheSlicesGivesIdoSegmentsSurfaceWithThatRegion) {
+  // ctrl+drag on the axial slice (k = 13) from voxel (8, 6) to (20, 26): the region spans those
+  // voxels in i and j, edge to edge; then ctrl+drag on the coronal slice (j = 16) from (8, 7) to
+  // (20, 18) sets i again and k. A click at voxel (14, 16) of the axial slice places the seed.
+  const view::SliceView axial(2, ct.size(), ct.spacing(), kAxial), coronal(1, ct.size(), ct.spacing(), kCoronal);
+  const auto [a0x, a0y] = axial.pixel_of(8, 6);
+  const auto [a1x, a1y] = axial.pixel_of(20, 26);
+  const auto [c0x, c0y] = coronal.pixel_of(8, 7);
+  const auto [c1x, c1y] = coronal.pixel_of(20, 18);
+  const auto [sx, sy] = axial.pixel_of(14, 16);
+  nlohmann::json shot = event(14, "screenshot");
+  shot["name"] = "roi.png";
+  write_script(dir / "roi.json",
+               {ctrl_mouse(1, "mouse_down", a0x, a0y), mouse(2, "mouse_move", (a0x + a1x) / 2, (a0y + a1y) / 2),
+                mouse(3, "mouse_move", a1x, a1y), ctrl_mouse(4, "mouse_up", a1x, a1y), ctrl_mouse(5, "mouse_down", c0x, c0y),
+                mouse(6, "mouse_move", c1x, c1y), ctrl_mouse(7, "mouse_up", c1x, c1y), mouse(8, "mouse_down", sx, sy),
+                mouse(9, "mouse_up", sx, sy), wait(10, "segment_done"), key(11, "key_down", "s", true),
+                key(12, "key_up", "s", true), wait(13, "idle"), shot, event(15, "quit")});
+  const auto r = run_view(fmt::format("{} --script {} --screenshots {} --surface {} --report {}", ct_path.string(),
+                                      (dir / "roi.json").string(), (dir / "shots").string(), (dir / "view.ply").string(),
+                                      (dir / "view.json").string()),
+                          dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
+  // The report has the region: the dragged voxels' edges in world coordinates.
+  const Vec3 lo = ct.index_to_world(Vec3(7.5, 5.5, 6.5)), hi = ct.index_to_world(Vec3(20.5, 26.5, 18.5));
+  const nlohmann::json report = read_json(dir / "view.json");
+  ASSERT_TRUE(report["roi_mm"].is_array()) << report["roi_mm"].dump();
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_EQ(report["roi_mm"][0][std::size_t(c)].get<double>(), lo[c]) << c;
+    EXPECT_EQ(report["roi_mm"][1][std::size_t(c)].get<double>(), hi[c]) << c;
+  }
+  // `ido segment --roi` with that region and the same seed writes the same surface and report.
+  const std::string roi = fmt::format("{:.17g},{:.17g},{:.17g},{:.17g},{:.17g},{:.17g}", lo.x(), lo.y(), lo.z(), hi.x(), hi.y(), hi.z());
+  const auto cli = test::run_tool(fmt::format("segment {} --seed-voxel 14,16,13 --roi {} -o {} --report {} -q", ct_path.string(),
+                                              roi, (dir / "cli.ply").string(), (dir / "cli.json").string()));
+  ASSERT_EQ(cli.exit_code, 0) << cli.err;
+  EXPECT_EQ(slurp(dir / "view.ply"), slurp(dir / "cli.ply")) << "the window's balloon differs from ido segment --roi's";
+  const nlohmann::json cli_report = read_json(dir / "cli.json");
+  for (const auto& [k, v] : cli_report.items()) {
+    if (k == "seconds" || k == "phase_seconds" || k == "surface" || k == "mask") continue;
+    EXPECT_EQ(report[k], v) << k;
+  }
+  // The region held the balloon: the ball (radius 9 mm) reaches past it in x, the surface does not.
+  const geometry::TriangleMesh surface = io::read_triangle_mesh(dir / "view.ply");
+  ASSERT_GT(surface.triangle_count(), 100u);
+  const geometry::Aabb box = geometry::Aabb::of(surface.vertices);
+  const Vec3 centre = ct.index_to_world(Vec3(14, 16, 13));
+  EXPECT_LT(centre.x() - 9.0, lo.x() - 1.0);
+  EXPECT_GT(box.min.x(), lo.x() - 1.1) << "one voxel of slack at the region's face";
+  EXPECT_LT(box.max.x(), hi.x() + 1.1);
+  EXPECT_LT(box.max.z() - box.min.z(), hi.z() - lo.z() + 2.4);
+  // The region shows as an orange rectangle on the axial slice.
+  const test::Png png = test::read_png(dir / "shots" / "roi.png");
+  ASSERT_EQ(png.w, kWidth);
+  EXPECT_GT(count(png, kAxial, [](int red, int green, int blue) { return red > 220 && green > 110 && green < 170 && blue < 40; }), 150);
+}
+
+TEST_F(ViewWindow, MaxRadiusGoesToTheBalloonAndTheReport) {
+  // --max-radius sets the panel's bound at start; the saved surface is segment_balloon()'s with
+  // BalloonChoices::max_radius_mm, and the report records it. (On this ball the bound does not
+  // bind: the seed region itself is what it is measured against.)
+  write_script(dir / "radius.json", {wait(1, "segment_done"), key(2, "key_down", "s", true), key(3, "key_up", "s", true),
+                                     wait(4, "idle"), event(5, "quit")});
+  const auto r = run_view(fmt::format("{} --seed-voxel 14,16,13 --max-radius 7 --script {} --surface {} --report {}",
+                                      ct_path.string(), (dir / "radius.json").string(), (dir / "view.ply").string(),
+                                      (dir / "view.json").string()),
+                          dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
+  EXPECT_EQ(read_json(dir / "view.json")["leak_control"]["max_radius_mm"].get<double>(), 7.0);
+  segment::BalloonChoices choices;
+  choices.max_radius_mm = 7.0;
+  const auto expected = segment::segment_balloon(ct, {ct.index_to_world(Vec3(14, 16, 13))}, segment::balloon_options(choices));
+  const geometry::TriangleMesh a = io::read_triangle_mesh(dir / "view.ply");
+  ASSERT_GT(a.triangle_count(), 0u);
+  io::write_triangle_mesh(dir / "lib.ply", expected.surface);
+  EXPECT_EQ(slurp(dir / "view.ply"), slurp(dir / "lib.ply"));
+  // (The report's bound is the one the run used: SegmentState::options, handed over by the worker.)
+}
+
+TEST_F(ViewWindow, SeveralBodiesInTheDeformWorkspaceGetALegendAndTheirNumbers) {
+  // Two beams side by side: coloured by displacement (all zero at rest), so only the legend's
+  // markers tell them apart: a swatch per body in the legend, and its number on the body.
+  std::ofstream(dir / "two.json") << R"({
+    "dt_s": 0.001, "steps": 1, "integrator": "implicit_euler",
+    "bodies": [{"name": "left", "mesh": {"generator": "beam", "size_mm": [40, 10, 10], "cells": [4, 1, 1]},
+                "model": "corotational_fem", "material": {"youngs_modulus_pa": 2e3, "poisson_ratio": 0.3, "density_kg_m3": 1000}},
+               {"name": "right", "mesh": {"generator": "beam", "size_mm": [40, 10, 10], "cells": [4, 1, 1], "origin_mm": [0, 30, 0]},
+                "model": "corotational_fem", "material": {"youngs_modulus_pa": 2e3, "poisson_ratio": 0.3, "density_kg_m3": 1000}}]})";
+  nlohmann::json shot = event(4, "screenshot");
+  shot["name"] = "bodies.png";
+  write_script(dir / "bodies.json", {key(1, "key_down", "f5", false), key(2, "key_up", "f5", false), shot, event(5, "quit")});
+  const auto r = run_view(fmt::format("{} --script {} --screenshots {}", (dir / "two.json").string(),
+                                      (dir / "bodies.json").string(), (dir / "shots").string()),
+                          dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const test::Png png = test::read_png(dir / "shots" / "bodies.png");
+  ASSERT_EQ(png.w, kWidth);
+  // The Deform view is the view area less the colour bar's 120 px: x 340..840; the legend at its top right.
+  const view::PixelRect legend{640, 40, 200, 60};
+  const Vec3 first(1.0, 0.3, 0.3), second(0.2, 0.9, 1.0);  // the markers of bodies 1 and 2
+  auto of = [&](const Vec3& c) { return [c](int red, int green, int blue) { return is_colour(red, green, blue, c); }; };
+  EXPECT_GE(count(png, legend, of(first)), 100) << "body 1's swatch";
+  EXPECT_GE(count(png, legend, of(second)), 100) << "body 2's swatch";
+  // Each number sits on its body's centre as the camera shows it.
+  view::OrbitCamera cam;
+  cam.frame(Vec3(0, 0, 0), Vec3(40, 40, 10));
+  const viz::Camera c = cam.camera();
+  for (const auto& [centre, colour] : {std::pair{Vec3(20, 5, 5), first}, {Vec3(20, 35, 5), second}}) {
+    const Vec4 clip = c.projection_matrix(500.0 / 640.0) * c.view_matrix() * Vec4(centre.x(), centre.y(), centre.z(), 1);
+    const double x = 340 + (clip.x() / clip.w() + 1) / 2 * 500, y = (1 - clip.y() / clip.w()) / 2 * 640;
+    EXPECT_GT(count(png, {x - 10, y - 10, 21, 21}, of(colour)), 40) << centre.transpose();
+  }
+}
+
+TEST_F(ViewWindow, SnapshotDrawsWhatWasOpenedWithoutADisplay) {
+  // Two surfaces: light grey and light blue, with a legend naming both; no DISPLAY, no Xvfb.
+  io::write_triangle_mesh(dir / "ball.stl", segment::balloon_icosphere(Vec3(0, 0, 0), 10.0, 3));
+  io::write_triangle_mesh(dir / "small.ply", segment::balloon_icosphere(Vec3(25, 0, 0), 6.0, 3));
+  auto r = run_headless(fmt::format("{} {} --snapshot {} --size 640x480 -q", (dir / "ball.stl").string(),
+                                    (dir / "small.ply").string(), (dir / "scene.png").string()),
+                        dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
+  test::Png png = test::read_png(dir / "scene.png");
+  ASSERT_EQ(png.w, 640);
+  ASSERT_EQ(png.h, 480);
+  const view::PixelRect all{0, 0, 640, 480}, legend{400, 40, 240, 60};
+  const Vec3 grey(0.8, 0.8, 0.85), blue(0.55, 0.75, 0.95);  // the first two objects' colours
+  auto of = [](const Vec3& c) { return [c](int red, int green, int blue_) { return is_colour(red, green, blue_, c); }; };
+  EXPECT_GE(count(png, legend, of(grey)), 100) << "the first surface's swatch";
+  EXPECT_GE(count(png, legend, of(blue)), 100) << "the second surface's swatch";
+  // Both surfaces are drawn, lit (shades of their colours) over the whole picture (no panel).
+  EXPECT_GT(count(png, all, [](int red, int green, int blue_) { return red > 70 && std::abs(red - green) < 12 && blue_ >= green && blue_ - green < 20; }), 5000);
+  EXPECT_GT(count(png, all, [](int red, int green, int blue_) { return blue_ > 80 && blue_ > red + 40 && green > red + 15; }), 1500);
+  // A CT with a seed: the snapshot waits for the balloon and shows it in the 3-D view (top
+  // right) and its contour on the axial slice (top left).
+  r = run_headless(fmt::format("{} --seed-voxel 14,16,13 --snapshot {} --size 640x480", ct_path.string(),
+                               (dir / "segment.png").string()),
+                   dir);
+  ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
+  EXPECT_NE(r.out.find("segment.png"), std::string::npos) << r.out;
+  png = test::read_png(dir / "segment.png");
+  ASSERT_EQ(png.w, 640);
+  EXPECT_GT(count(png, {320, 0, 320, 240}, [](int red, int green, int blue_) { return red > 90 && red > green + 25 && green > blue_ + 10; }), 400);
+  EXPECT_GT(count(png, {0, 0, 320, 240}, [](int red, int green, int blue_) { return red > 200 && green < 90 && blue_ < 90; }), 30);
+  // Bad: not a PNG name; a script (a snapshot has no window to replay into).
+  r = run_headless(fmt::format("{} --snapshot {}", ct_path.string(), (dir / "x.jpg").string()), dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--snapshot"), std::string::npos) << r.err;
+}
+
 TEST_F(ViewWindow, BadInputIsExitTwoAndNoDisplayIsExitOne) {
   auto r = run_view(fmt::format("{} --script {}", ct_path.string(), (dir / "missing.json").string()), dir);
   EXPECT_EQ(r.exit_code, 2);
@@ -792,6 +971,12 @@ TEST_F(ViewWindow, BadInputIsExitTwoAndNoDisplayIsExitOne) {
   r = run_view(fmt::format("{} --drill-replay {} --frames 1", ct_path.string(), (dir / "no-path.csv").string()), dir);
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("no-path.csv"), std::string::npos) << r.err;
+  r = run_view(fmt::format("{} --max-radius -1 --frames 1", ct_path.string()), dir);  // refused as the library refuses it
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--max-radius"), std::string::npos) << r.err;
+  r = run_view(fmt::format("{} --roi 0,0,0,1,1 --frames 1", ct_path.string()), dir);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--roi"), std::string::npos) << r.err;
   r = run_view(fmt::format("{} --shaft-radius 2 --frames 1", ct_path.string()), dir);  // not thinner than the burr
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("--shaft-radius"), std::string::npos) << r.err;

@@ -33,7 +33,8 @@ struct SegmentRequest {
 void check_segment_outputs(const SegmentOutputs& outputs);
 
 /// The segmentation report for @p result ("surface" and "mask" name @p outputs): the request
-/// (input, seeds, organ, options, stop points) and io::to_json of the balloon's report; the
+/// (input, seeds, organ, options, stop points, region of interest `roi_mm` [[min], [max]] and
+/// `leak_control.max_radius_mm`, each null when not set) and io::to_json of the balloon's report; the
 /// document `ido segment --report` writes (which adds its calcification and snapshot keys) and
 /// the workbench saves. Keys: docs/reports.md.
 [[nodiscard]] io::Json segment_report_json(const SegmentRequest& request, const segment::BalloonResult& result,

@@ -3,9 +3,11 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <vector>
 
 #include "ido/core/math.h"
+#include "ido/geometry/aabb.h"
 #include "ido/segment/organ.h"
 #include "ido/view/segment_output.h"
 
@@ -27,6 +29,12 @@ struct WorkbenchOptions {
   /// Stop points placed at start (voxel indices of the CT): the balloon's front does not pass
   /// them (segment::LeakControlOptions::stop_points_mm).
   std::vector<Index3> stop_voxels;
+  /// The Segment workspace's first region of interest (world mm; segment::BalloonChoices::roi_mm):
+  /// outside it the balloon deflates. Unset: none (one can be drawn on the slices).
+  std::optional<geometry::Aabb> roi_mm;
+  /// The Segment workspace's first bound on the organ's local radius (mm;
+  /// segment::BalloonChoices::max_radius_mm). Unset: none.
+  std::optional<double> max_radius_mm;
   SegmentOutputs segment_outputs;     ///< where Save (ctrl+s) in the Segment workspace writes the segmentation
   std::filesystem::path tet_output;   ///< where Save (ctrl+s) in the Mesh workspace writes the tetrahedra (.vtu .msh .node)
   double tet_edge_mm = 0.0;           ///< the Mesh workspace's first lattice spacing (mm); 0 = the surface's mean edge
@@ -43,6 +51,11 @@ struct WorkbenchOptions {
   int drill_udp_port = 0;
   /// Deform workspace: written on exit, the grabbed particle's positions over the run (JSON).
   std::filesystem::path deform_log;
+  /// Instead of opening a window: render one picture of what was opened (the views of the
+  /// first workspace, without the panel: Segment with a volume, else Scene) off-screen, with no
+  /// display (EGL, Mesa's surfaceless platform), write it here as PNG and return. Seeds given
+  /// at start are grown first, so the picture shows the finished balloon.
+  std::filesystem::path snapshot;
   bool quiet = false;                 ///< no messages on stdout
 };
 
@@ -57,6 +70,9 @@ struct FrameRecord {
   Workspace workspace = Workspace::Scene;  ///< the workspace shown
   float ms = 0.0f;             ///< wall time of the frame loop's iteration (ms): input, panel, drawing, swap
   bool script_waiting = false; ///< a script's wait held the frame (the loop then also sleeps 10 ms)
+  /// The 3-D view was drawn anew; false when nothing it shows changed and its last picture was
+  /// copied (Scene, Segment, Mesh). Drill and Deform draw every frame.
+  bool view_drawn = true;
 };
 
 /// What a workbench run measured.
