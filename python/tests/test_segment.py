@@ -139,6 +139,9 @@ def test_leak_control_stops_at_the_valve_and_a_stop_point_holds_the_front():
     held = ido.segment(p.ct, p.seeds, stop_points=[stop])
     assert held.surface.vertices[:, 2].max() < stop[2]
     assert "stop_point" in [e["cause"] for e in held.report["leak_control"]["events"]]
+    # The report lists the controls it ran with, as `ido segment --report` does.
+    assert held.report["leak_control"]["stop_points_mm"] == [pytest.approx(list(stop))]
+    assert held.report["leak_control"]["max_radius_mm"] is None
 
 
 def test_organ_choice_is_checked_and_sets_the_bone_band():

@@ -74,6 +74,8 @@ json to_json(const segment::BalloonReport& r) {
                       {"neck_area_mm2", e.neck_area_mm2},
                       {"neck_radius_mm", e.neck_radius_mm}});
   for (const Vec3& m : r.neighbour_markers_mm) markers.push_back(vec(m));
+  json stops = json::array();
+  for (const Vec3& p : r.stop_points_mm) stops.push_back(vec(p));
   return {{"reference", r.model.reference},
           {"tolerance", r.model.tolerance},
           {"accept_brighter", r.model.accept_brighter},
@@ -82,7 +84,9 @@ json to_json(const segment::BalloonReport& r) {
            {{"seed_radius_mm", r.seed_radius_mm},
             {"chamber_radius_mm", finite_or_null(r.chamber_radius_mm)},
             {"neighbour_markers_mm", markers},
-            {"events", events}}},
+            {"events", events},
+            {"stop_points_mm", stops},
+            {"max_radius_mm", finite_or_null(r.max_radius_mm)}}},
           {"seconds", r.seconds},
           {"phase_seconds",
            {{"setup", r.phase_seconds.setup},

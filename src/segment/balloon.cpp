@@ -703,6 +703,8 @@ Balloon::Balloon(const image::Volume<float>& ct, const std::vector<Vec3>& seeds_
   m->report.seed_radius_mm = m->guard.seed_radius_mm();
   m->report.chamber_radius_mm = m->guard.chamber_radius_mm();
   m->report.neighbour_markers_mm = m->guard.neighbour_markers_mm();
+  m->report.stop_points_mm = options.leak.stop_points_mm;
+  m->report.max_radius_mm = options.leak.max_radius_mm;
   geometry::TriangleMesh all;
   const double r0 = options.seed_radius_voxels * ct.spacing().mean();
   for (const Vec3& s : seeds_mm) {

@@ -38,11 +38,8 @@ io::Json segment_report_json(const SegmentRequest& request, const segment::Ballo
                 {"edge_reach_voxels", bo.edge_reach_voxels},
                 {"outside_level", bo.outside_level ? io::Json(*bo.outside_level) : io::Json(nullptr)}};
   j.update(io::to_json(result.report));  // the balloon's figures, as every report writes them
-  j["leak_control"]["stop_points_mm"] = points(bo.leak.stop_points_mm);
-  // The user's bounds: the region of interest and the local radius bound (null: none).
+  // The region of interest (null: none); the stop points and radius bound are the balloon's.
   j["roi_mm"] = bo.roi_mm ? points({bo.roi_mm->min, bo.roi_mm->max}) : io::Json(nullptr);
-  j["leak_control"]["max_radius_mm"] =
-      std::isfinite(bo.leak.max_radius_mm) ? io::Json(bo.leak.max_radius_mm) : io::Json(nullptr);
   j["surface"] = outputs.surface.empty() ? io::Json(nullptr) : io::Json(outputs.surface.string());
   j["mask"] = outputs.mask.empty() ? io::Json(nullptr) : io::Json(outputs.mask.string());
   return j;

@@ -60,6 +60,31 @@ TEST(LeakGuard, ClosesAChamberWiderThanTheSeedRegion) {
   EXPECT_FALSE(LeakGuard(smoothed, model, {Vec3(24, 24, 16)}, off).active());
 }
 
+// An aorta leaving the heart, at scale: a tube of radius 6 mm (z = 4–40), a root 1.4 times as
+// wide (r 8.4 mm, z = 40–50, the sinuses), then a chamber of radius 13 mm centred at z = 64 —
+// a left ventricle's inscribed radius is about twice the descending aorta's (21–29 mm against
+// 10–14 mm), not the 4× of the valve-chamber phantom.
+bool aorta_root_and_ventricle(const Vec3& p) {
+  return segment_distance(p, Vec3(24, 24, 4), Vec3(24, 24, 40)) <= 6.0 ||
+         segment_distance(p, Vec3(24, 24, 40), Vec3(24, 24, 50)) <= 8.4 || (p - Vec3(24, 24, 64)).norm() <= 13.0;
+}
+
+TEST(LeakGuard, TheArteryChoiceClosesAVentricleTwiceTheAortasRadiusButNotTheRoot) {
+  const auto ct = vessel_volume({48, 48, 80}, aorta_root_and_ventricle);
+  const image::Volume<float> smoothed = image::gaussian_smooth(ct, 0.7);
+  const IntensityModel model{350, 120};
+  const Vec3 seed(24, 24, 16);
+  const LeakGuard artery(smoothed, model, {seed}, organ_options(Organ::Artery).leak);
+  EXPECT_NEAR(artery.seed_radius_mm(), 6.0, 1.0);
+  EXPECT_EQ(artery.cause_at(Vec3(24, 24, 64)), LeakCause::Chamber);  // the ventricle's centre
+  EXPECT_EQ(artery.cause_at(Vec3(24, 24, 72)), LeakCause::Chamber);  // its far side
+  EXPECT_EQ(artery.cause_at(Vec3(24, 24, 45)), LeakCause::None);     // the root
+  EXPECT_EQ(artery.cause_at(Vec3(24, 24, 30)), LeakCause::None);     // the tube
+  // The generic default (2.5 × the seed's radius) lets such a ventricle through.
+  const LeakGuard generic(smoothed, model, {seed}, BalloonOptions{}.leak);
+  EXPECT_EQ(generic.cause_at(Vec3(24, 24, 64)), LeakCause::None);
+}
+
 TEST(LeakGuard, TheBalloonStopsAtTheNeckAndReportsIt) {
   const auto ct = vessel_volume({48, 48, 76}, tube_and_chamber);
   BalloonOptions o;
@@ -97,6 +122,10 @@ TEST(LeakGuard, AStopPointClosesTheVesselBeyondIt) {
   EXPECT_GT(zmax, 50.0 - 12.0);
   ASSERT_FALSE(r.report.leaks.empty());
   EXPECT_EQ(r.report.leaks.front().cause, LeakCause::StopPoint);
+  // The report records the user's controls of the run.
+  ASSERT_EQ(r.report.stop_points_mm.size(), 1u);
+  EXPECT_EQ(r.report.stop_points_mm[0], Vec3(20, 20, 50));
+  EXPECT_TRUE(std::isinf(r.report.max_radius_mm));
 }
 
 TEST(LeakGuard, MaxRadiusClosesWhereAWiderBallFits) {

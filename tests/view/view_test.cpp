@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
-// The workbench's parts that need no window: event scripts, the slice layout (which voxel a
-// click lands on), the orbit camera's pick ray, and the balloon session on its worker thread
-// (its result equals segment_balloon()'s bit for bit however it was paused and stepped).
+// The workbench's sessions that need no window: drilling, deformation and the balloon session on
+// its worker thread (its result equals segment_balloon()'s bit for bit however it was paused and
+// stepped), and the segmentation's outputs. Event scripts, the slice layout, the orbit camera
+// and the tetrahedral section have their own test files.
 
 #include <chrono>
 #include <fstream>
@@ -10,6 +11,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "ido/geometry/aabb.h"
 #include "ido/core/error.h"
 #include "ido/segment/balloon.h"
 #include "ido/segment/organ.h"
@@ -17,12 +19,8 @@
 #include "ido/io/scene.h"
 #include "ido/view/deform_session.h"
 #include "ido/view/drill_session.h"
-#include "ido/view/event_script.h"
-#include "ido/view/orbit_camera.h"
 #include "ido/view/segment_output.h"
 #include "ido/view/segment_session.h"
-#include "ido/view/slice_view.h"
-#include "ido/view/tet_section.h"
 #include "support/ball_ct.h"
 #include "support/test_support.h"
 
@@ -30,229 +28,6 @@ namespace ido {
 namespace {
 
 namespace fs = std::filesystem;
-
-using view::EventKind;
-
-// ---- event scripts ---------------------------------------------------------------------------
-
-TEST(EventScript, RoundTripKeepsEveryField) {
-  view::EventScript s;
-  s.window_width_px = 900;
-  s.window_height_px = 600;
-  auto add = [&](std::int64_t frame, EventKind kind) -> view::InputEvent& {
-    view::InputEvent e;
-    e.frame = frame;
-    e.kind = kind;
-    s.events.push_back(e);
-    return s.events.back();
-  };
-  add(1, EventKind::MouseMove).x_px = 10.5;
-  s.events.back().y_px = 20.25;
-  auto& down = add(2, EventKind::MouseDown);
-  down.x_px = 11;
-  down.y_px = 21;
-  down.button = 1;
-  down.shift = true;  // a shift-click (a stop point on a slice)
-  auto& up = add(3, EventKind::MouseUp);
-  up.x_px = 12;
-  up.y_px = 22;
-  up.button = 1;
-  auto& scroll = add(3, EventKind::Scroll);
-  scroll.x_px = 5;
-  scroll.scroll_y = -2;
-  auto& key = add(4, EventKind::KeyDown);
-  key.key = "s";
-  key.ctrl = true;
-  key.alt = true;
-  add(5, EventKind::KeyUp).key = "s";
-  add(5, EventKind::Char).codepoint = 0x41;
-  auto& wait = add(6, EventKind::Wait);
-  wait.until = "segment_done";
-  wait.timeout_s = 30;
-  auto& steps = add(6, EventKind::Wait);
-  steps.until = "deform_steps";
-  steps.steps = 250;
-  add(7, EventKind::Screenshot).name = "a.png";
-  add(8, EventKind::Quit);
-  const view::EventScript back = view::EventScript::parse(s.to_json(), "test");
-  EXPECT_EQ(back.window_width_px, 900);
-  EXPECT_EQ(back.window_height_px, 600);
-  ASSERT_EQ(back.events.size(), s.events.size());
-  for (std::size_t i = 0; i < s.events.size(); ++i) {
-    const auto &a = s.events[i], &b = back.events[i];
-    EXPECT_EQ(a.frame, b.frame);
-    EXPECT_EQ(a.kind, b.kind) << i;
-    EXPECT_EQ(a.x_px, b.x_px);
-    EXPECT_EQ(a.y_px, b.y_px);
-    EXPECT_EQ(a.button, b.button);
-    EXPECT_EQ(a.scroll_y, b.scroll_y);
-    EXPECT_EQ(a.key, b.key);
-    EXPECT_EQ(a.ctrl, b.ctrl);
-    EXPECT_EQ(a.shift, b.shift) << i;
-    EXPECT_EQ(a.alt, b.alt) << i;
-    EXPECT_EQ(a.codepoint, b.codepoint);
-    EXPECT_EQ(a.name, b.name);
-    EXPECT_EQ(a.until, b.until);
-    EXPECT_EQ(a.steps, b.steps);
-    EXPECT_EQ(a.timeout_s, b.timeout_s);
-  }
-}
-
-TEST(EventScript, MalformedScriptsNameTheEvent) {
-  auto message = [](const std::string& text) -> std::string {
-    try {
-      (void)view::EventScript::parse(text, "s.json");
-    } catch (const Error& e) {
-      return e.what();
-    }
-    return "accepted";
-  };
-  EXPECT_NE(message("{\"events\": [{\"frame\": 1, \"type\": \"fly\"}]}").find("/events/0/type"), std::string::npos);
-  EXPECT_NE(message("{\"events\": [{\"frame\": 3, \"type\": \"quit\"}, {\"frame\": 2, \"type\": \"quit\"}]}")
-                .find("/events/1/frame"),
-            std::string::npos);
-  EXPECT_NE(message("{\"events\": [{\"frame\": 1, \"type\": \"mouse_down\", \"button\": \"fourth\"}]}").find("button"),
-            std::string::npos);
-  EXPECT_NE(message("{\"events\": [{\"frame\": 1, \"type\": \"screenshot\", \"name\": \"../x.png\"}]}").find("name"),
-            std::string::npos);
-  EXPECT_NE(message("{\"window\": [10, 10], \"events\": []}").find("/window"), std::string::npos);
-  EXPECT_NE(message("{\"events\": [").find("s.json"), std::string::npos);
-  EXPECT_NE(message("{\"events\": [{\"frame\": 1, \"type\": \"key_down\", \"key\": \"a\", \"ctrl\": 1}]}").find("/events/0/ctrl"),
-            std::string::npos);
-  EXPECT_EQ(message("{\"events\": []}"), "accepted");
-}
-
-// ---- slice layout --------------------------------------------------------------------------
-
-TEST(SliceView, PixelAndVoxelAreInverseAndMillimetresSquare) {
-  const Index3 size = {40, 30, 20};
-  const Vec3 spacing(0.8, 1.2, 2.5);
-  for (int axis = 0; axis < 3; ++axis) {
-    const view::SliceView v(axis, size, spacing, {100, 50, 400, 300});
-    const int u = v.u_axis(), w = v.v_axis();
-    EXPECT_NE(u, axis);
-    EXPECT_NE(w, axis);
-    EXPECT_NE(u, w);
-    for (std::int64_t a = 0; a < size[std::size_t(u)]; a += 3)
-      for (std::int64_t b = 0; b < size[std::size_t(w)]; b += 3) {
-        const auto p = v.pixel_of(double(a), double(b));
-        EXPECT_TRUE(v.rect().contains(p[0], p[1]));
-        const auto back = v.voxel_at(p[0], p[1]);
-        ASSERT_TRUE(back);
-        EXPECT_EQ((*back)[0], a);
-        EXPECT_EQ((*back)[1], b);
-        // A quarter of a voxel off the centre still lands on the voxel.
-        const auto near = v.voxel_at(p[0] + 0.24 * spacing[u] * v.scale_px_per_mm(), p[1]);
-        ASSERT_TRUE(near);
-        EXPECT_EQ((*near)[0], a);
-      }
-    // One voxel step is its spacing in pixels along each axis: millimetres are square.
-    const auto p0 = v.pixel_of(0, 0), p1 = v.pixel_of(1, 1);
-    EXPECT_TRUE(test::near(std::abs(p1[0] - p0[0]), spacing[u] * v.scale_px_per_mm(), 1e-9));
-    EXPECT_TRUE(test::near(std::abs(p1[1] - p0[1]), spacing[w] * v.scale_px_per_mm(), 1e-9));
-    // Outside the slice nothing is hit.
-    EXPECT_FALSE(v.voxel_at(p0[0] - spacing[u] * v.scale_px_per_mm(), p0[1]));
-  }
-  // Axial: j grows downwards; coronal and sagittal: k grows upwards (superior up).
-  const view::SliceView axial(2, size, spacing, {0, 0, 400, 300}), coronal(1, size, spacing, {0, 0, 400, 300});
-  EXPECT_GT(axial.pixel_of(0, 5)[1], axial.pixel_of(0, 0)[1]);
-  EXPECT_LT(coronal.pixel_of(0, 5)[1], coronal.pixel_of(0, 0)[1]);
-}
-
-TEST(SliceView, NdcMatrixMapsVoxelsWhereThePixelsAre) {
-  const view::SliceView v(1, {40, 30, 20}, Vec3(0.8, 1.2, 2.5), {100, 50, 400, 300});
-  const Mat4 m = v.ndc_from_index();
-  for (const auto& [a, b] : {std::pair{0.0, 0.0}, {39.0, 19.0}, {12.5, 7.0}}) {
-    const Vec4 ndc = m * Vec4(a, b, 0, 1);
-    const auto p = v.pixel_of(a, b);
-    EXPECT_TRUE(test::near(v.rect().x + (ndc.x() + 1) / 2 * v.rect().width, p[0], 1e-9));
-    EXPECT_TRUE(test::near(v.rect().y + (1 - ndc.y()) / 2 * v.rect().height, p[1], 1e-9));
-  }
-}
-
-// ---- orbit camera --------------------------------------------------------------------------
-
-TEST(OrbitCamera, CentreRayHitsTheTargetAndTurningKeepsTheDistance) {
-  view::OrbitCamera cam;
-  cam.frame(Vec3(-10, -20, 0), Vec3(30, 20, 50));
-  const Vec3 target = cam.target();
-  for (int turn = 0; turn < 4; ++turn) {
-    const auto [origin, dir] = cam.pick_ray(200, 150, 400, 300);
-    const double along = (target - origin).dot(dir);
-    EXPECT_TRUE(test::near((origin + along * dir - target).norm(), 0.0, 1e-9));
-    EXPECT_TRUE(test::near((cam.camera().eye() - target).norm(), cam.distance_mm(), 1e-9));
-    cam.rotate(37, -11);
-  }
-  // A pixel right of the centre looks right of the target.
-  const auto [o, d] = cam.pick_ray(300, 150, 400, 300);
-  const Mat4 view = cam.camera().view_matrix();
-  const Vec3 right = view.block<1, 3>(0, 0).transpose();
-  EXPECT_GT(d.dot(right), 0.0);
-  const double before = cam.distance_mm();
-  cam.zoom(2);
-  EXPECT_TRUE(test::near(cam.distance_mm(), before * 0.81, 1e-9));
-}
-
-// ---- the Mesh workspace's section and histogram ---------------------------------------------
-
-/// The unit cube in 5 positively oriented tetrahedra (four corners and a regular one inside).
-geometry::TetMesh unit_cube() {
-  geometry::TetMesh m;
-  for (int c = 0; c < 8; ++c) m.vertices.push_back(Vec3(c & 1, (c >> 1) & 1, (c >> 2) & 1));
-  m.tets = {{0, 1, 2, 4}, {3, 1, 2, 7}, {5, 1, 4, 7}, {6, 2, 4, 7}, {1, 2, 4, 7}};
-  for (Tet& t : m.tets) {
-    const auto& v = m.vertices;
-    const Vec3 a = v[std::size_t(t[0])];
-    if ((v[std::size_t(t[1])] - a).cross(v[std::size_t(t[2])] - a).dot(v[std::size_t(t[3])] - a) < 0) std::swap(t[2], t[3]);
-  }
-  return m;
-}
-
-double area(const geometry::TriangleMesh& m, const Vec3& n, bool* facing) {
-  double total = 0;
-  *facing = true;
-  for (const Tri& t : m.triangles) {
-    const Vec3 c = (m.vertices[std::size_t(t[1])] - m.vertices[std::size_t(t[0])])
-                       .cross(m.vertices[std::size_t(t[2])] - m.vertices[std::size_t(t[0])]);
-    total += 0.5 * c.norm();
-    if (c.dot(n) <= 0) *facing = false;
-  }
-  return total;
-}
-
-TEST(TetSection, CutsThroughTetrahedraWithTheCrossSectionsArea) {
-  const geometry::TetMesh cube = unit_cube();
-  // Parallel to a face: every tetrahedron is cut and the section is the unit square.
-  viz::ClipPlane plane{Vec3(0.3, 0.6, 0.37), Vec3(0, 0, 2)};
-  view::TetSection s = view::tet_section(cube, plane);
-  EXPECT_EQ(s.cut_tets, 5u);
-  bool facing = false;
-  EXPECT_TRUE(test::near(area(s.faces, Vec3::UnitZ(), &facing), 1.0, 1e-12));
-  EXPECT_TRUE(facing) << "section faces face along the normal";
-  for (const Vec3& p : s.faces.vertices) EXPECT_TRUE(test::near(p.z(), 0.37, 1e-12));
-  EXPECT_GE(s.edges.size(), 15u);  // 4 triangles and a quadrilateral: 3·4 + 4 edges
-  // Oblique: x + y + z = 1.5 cuts the cube in a regular hexagon of side √2/2, area 3√3/4.
-  plane = {Vec3(0.5, 0.5, 0.5), Vec3(1, 1, 1)};
-  s = view::tet_section(cube, plane);
-  EXPECT_TRUE(test::near(area(s.faces, Vec3(1, 1, 1), &facing), 3.0 * std::sqrt(3.0) / 4.0, 1e-12));
-  EXPECT_TRUE(facing);
-  // Beside the mesh: nothing.
-  plane = {Vec3(0, 0, 2), Vec3(0, 0, 1)};
-  EXPECT_EQ(view::tet_section(cube, plane).cut_tets, 0u);
-  EXPECT_THROW((void)view::tet_section(cube, {Vec3::Zero(), Vec3::Zero()}), InvalidInput);
-}
-
-TEST(TetSection, DihedralHistogramCountsEveryAngle) {
-  const auto h = view::dihedral_histogram(unit_cube(), 36);
-  ASSERT_EQ(h.size(), 36u);
-  std::size_t total = 0;
-  for (std::size_t c : h) total += c;
-  EXPECT_EQ(total, 30u);
-  EXPECT_EQ(h[14], 6u);   // the regular tetrahedron inside: acos(1/3) = 70.53° (bin 70-75°)
-  EXPECT_EQ(h[10], 12u);  // the corner tetrahedra's atan(√2) = 54.74° angles (three each): bin 50-55°
-  EXPECT_EQ(h[18], 12u);  // and their 90° angles in bin 90-95°
-  EXPECT_THROW((void)view::dihedral_histogram(unit_cube(), 0), InvalidInput);
-}
 
 // ---- a drilling session moved by the window ----------------------------------------------------
 
@@ -550,10 +325,18 @@ TEST(SegmentOutput, ReportRecordsSeedsOrganAndSurfaceFigures) {
   EXPECT_EQ(j["surface"], "s.stl");
   EXPECT_TRUE(j["mask"].is_null());
   EXPECT_TRUE(j["leak_control"]["stop_points_mm"].empty());
-  // Stop points the balloon was given are listed with the leak control's figures.
-  request.options.leak.stop_points_mm = {Vec3(1.5, -2.25, 40.125)};
-  const nlohmann::json with_stop = view::segment_report_json(request, r, {});
+  EXPECT_TRUE(j["leak_control"]["max_radius_mm"].is_null());
+  EXPECT_TRUE(j["roi_mm"].is_null());
+  // The stop points and radius bound the balloon ran with are listed with the leak control's
+  // figures (from its report); the region of interest from the request.
+  segment::BalloonResult with_controls = r;
+  with_controls.report.stop_points_mm = {Vec3(1.5, -2.25, 40.125)};
+  with_controls.report.max_radius_mm = 7.5;
+  request.options.roi_mm = geometry::Aabb{Vec3(-1, -2, -3), Vec3(4, 5, 6)};
+  const nlohmann::json with_stop = view::segment_report_json(request, with_controls, {});
   EXPECT_EQ(with_stop["leak_control"]["stop_points_mm"], nlohmann::json::parse("[[1.5, -2.25, 40.125]]"));
+  EXPECT_EQ(with_stop["leak_control"]["max_radius_mm"].get<double>(), 7.5);
+  EXPECT_EQ(with_stop["roi_mm"], nlohmann::json::parse("[[-1, -2, -3], [4, 5, 6]]"));
   EXPECT_THROW(view::check_segment_outputs({"s.txt", "", ""}), InvalidInput);
   EXPECT_THROW(view::check_segment_outputs({"", "m.stl", ""}), InvalidInput);
   EXPECT_NO_THROW(view::check_segment_outputs({"s.ply", "m.nii.gz", "r.json"}));

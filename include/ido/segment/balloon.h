@@ -164,6 +164,8 @@ struct BalloonReport {
   double seed_radius_mm = 0;             ///< the seed region's radius (LeakGuard::seed_radius_mm)
   double chamber_radius_mm = INFINITY;   ///< radius past which the band is a chamber (infinity: none)
   std::vector<Vec3> neighbour_markers_mm;  ///< markers put in neighbouring bodies (separate_neighbours)
+  std::vector<Vec3> stop_points_mm;        ///< the user's stop points of the run (LeakControlOptions)
+  double max_radius_mm = INFINITY;         ///< the user's bound on the local radius (infinity: none)
 };
 
 /// Sets the mesh figures of @p report (volume, area, V/E/F, Euler characteristic, components,

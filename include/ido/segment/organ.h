@@ -14,7 +14,7 @@ namespace ido::segment {
 /// documented BalloonOptions (docs/segmentation.md, "Organ choices"). Generic keeps them all.
 enum class Organ {
   Generic,   ///< the defaults: the paper's symmetric band, leak control against chambers
-  Artery,    ///< contrast-filled CT vessel: the lumen's wall (outside level 40 HU), edge reach 2 voxels
+  Artery,    ///< contrast-filled CT vessel: the lumen's wall (outside level 40 HU), edge reach 2 voxels, chambers from 1.6× the seed's radius
   Vein,      ///< as Artery, with a chamber at twice the vein's radius (a vein inside parenchyma of a close grey level)
   Vertebra,  ///< bone (brighter also belongs) separated from the vertebrae above and below
 };
