@@ -42,6 +42,7 @@
 #include "ido/segment/balloon.h"
 #include "ido/segment/metrics.h"
 #include "ido/segment/organ.h"
+#include "ido/sim/fem_corotational.h"
 #include "ido/viz/renderer.h"
 
 namespace ido::cli {
@@ -197,35 +198,69 @@ json run_drill(const Options& o, const geometry::TetMesh& mesh, const image::Vol
 }
 
 /// A short deformation of @p mesh: corotational FEM, implicit Euler, the lowest 15 % (along
-/// z) clamped, sagging under gravity along −y. The scene is written next to the mesh so it
-/// can be re-run with `ido simulate`.
+/// z) clamped, sagging under gravity along −y. The world is built in memory and stepped by the
+/// library's run loop (io::run_scene's writer observer puts the frames, energies and report in
+/// deformation/); the same scene is also written as deformation/scene.json + body.vtu so that
+/// `ido simulate` re-runs it, but nothing is read back.
 json run_deformation(const geometry::TetMesh& mesh, const fs::path& dir, int steps, json& pictures,
                      Progress* progress) {
   const fs::path sim_dir = dir / "deformation";
   fs::create_directories(sim_dir);
-  io::write_tet_mesh(sim_dir / "body.vtu", mesh);
   const geometry::Aabb box = geometry::Aabb::of(mesh.vertices);
   const Vec3 &lo = box.min, &hi = box.max;
   const double clamp_z = lo.z() + 0.15 * (hi.z() - lo.z());
-  const json scene = {
+  const Vec3 fixed_min(lo.x() - 1, lo.y() - 1, lo.z() - 1), fixed_max(hi.x() + 1, hi.y() + 1, clamp_z);
+  constexpr double kDt = 0.01, kRayleighMass = 1.0, kGravityY = -9806.65;   // s, 1/s, mm/s² (along y)
+  constexpr int kDensity = 1060;   // kg/m³
+  const sim::ElasticMaterial material{.youngs_modulus_pa = 5e4, .poisson_ratio = 0.45};
+  const int output_every = std::max(1, steps / 10);
+
+  io::Scene scene;
+  scene.source = (sim_dir / "scene.json").string();
+  scene.dt_s = kDt;
+  scene.steps = steps;
+  scene.output_every = output_every;
+  auto& world = scene.world;
+  world.set_integrator("implicit_euler");
+  world.implicit_options().cg_tolerance = 1e-6;
+  world.implicit_options().cg_max_iterations = 300;
+  world.external().gravity_mm_s2 = Vec3(0, kGravityY, 0);
+  world.external().damping.mass_per_s = kRayleighMass;
+  io::SceneBody body;
+  body.name = "vessel";
+  body.rest_mesh = mesh;
+  body.material = material;
+  body.first_particle = world.add_tet_body(mesh, kDensity);
+  world.emplace_model<sim::CorotationalFem>(mesh.tets, world.particles().positions(), material);
+  body.model_index = body.stress_model_index = world.models().size() - 1;
+  const geometry::Aabb clamp{fixed_min, fixed_max};
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
+    if (clamp.contains(mesh.vertices[i])) world.particles().set_fixed(i, true);
+  scene.bodies.push_back(std::move(body));
+
+  // The same scene as a file, for `ido simulate`.
+  io::write_tet_mesh(sim_dir / "body.vtu", mesh);
+  const json scene_json = {
       {"description", "pipeline: the segmented vessel, clamped at its lower end, sagging under gravity"},
-      {"dt_s", 0.01},
+      {"dt_s", kDt},
       {"steps", steps},
-      {"output_every", std::max(1, steps / 10)},
+      {"output_every", output_every},
       {"integrator", "implicit_euler"},
       {"implicit", {{"cg_tolerance", 1e-6}, {"cg_max_iterations", 300}}},
-      {"gravity_mm_s2", {0, -9806.65, 0}},
-      {"damping", {{"rayleigh_mass_per_s", 1.0}, {"rayleigh_stiffness_s", 0.0}}},
+      {"gravity_mm_s2", {0, kGravityY, 0}},
+      {"damping", {{"rayleigh_mass_per_s", kRayleighMass}, {"rayleigh_stiffness_s", 0.0}}},
       {"bodies",
        {{{"name", "vessel"},
          {"mesh", {{"file", "body.vtu"}}},
          {"model", "corotational_fem"},
-         {"material", {{"youngs_modulus_pa", 5e4}, {"poisson_ratio", 0.45}, {"density_kg_m3", 1060}}},
-         {"fixed", {{{"box_min_mm", {lo.x() - 1, lo.y() - 1, lo.z() - 1}},
-                     {"box_max_mm", {hi.x() + 1, hi.y() + 1, clamp_z}}}}}}}}};
-  write_text_file((sim_dir / "scene.json").string(), scene.dump(2) + "\n");
-  auto loaded = io::load_scene(sim_dir / "scene.json");
-  const auto result = io::run_scene(loaded, sim_dir, progress);
+         {"material", {{"youngs_modulus_pa", material.youngs_modulus_pa},
+                       {"poisson_ratio", material.poisson_ratio},
+                       {"density_kg_m3", kDensity}}},
+         {"fixed", {{{"box_min_mm", {fixed_min.x(), fixed_min.y(), fixed_min.z()}},
+                     {"box_max_mm", {fixed_max.x(), fixed_max.y(), fixed_max.z()}}}}}}}}};
+  write_text_file((sim_dir / "scene.json").string(), scene_json.dump(2) + "\n");
+
+  const auto result = io::run_scene(scene, sim_dir, progress);
   write_energy_plot(sim_dir / "energy.png", result);
   pictures.push_back(json{{"file", "deformation/energy.png"}, {"what", "energy of the deforming vessel over time"}});
   std::vector<double> ms = result.step_ms;

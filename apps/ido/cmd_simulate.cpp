@@ -2,14 +2,14 @@
 // `ido simulate SCENE.json -o OUTDIR [--snapshots DIR [--snapshot-every FRAMES]
 //  [--snapshot-field von_mises|displacement] [--snapshot-size WxH]]`: runs a JSON scene
 // (docs/scene.md) and writes VTU frames with a .pvd index, energy.csv, energy.png,
-// report.json and, on request, pictures of the deforming bodies.
+// report.json and, on request, pictures of the deforming bodies, drawn from the frames the run
+// hands over in memory.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <limits>
 #include <memory>
-#include <sstream>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -20,7 +20,6 @@
 #include "command.h"
 #include "energy_plot.h"
 #include "ido/core/error.h"
-#include "ido/io/mesh_io.h"
 #include "ido/io/scene.h"
 #include "ido/viz/renderer.h"
 #include "snapshots.h"
@@ -37,14 +36,13 @@ struct Options {
   std::string snapshot_size = "800x600";
 };
 
-/// The per-tetrahedron value pictured: von Mises stress (Pa) as written by run_scene, or the
+/// The per-tetrahedron value pictured: von Mises stress (Pa) as run_scene writes it, or the
 /// mean displacement magnitude (mm) of the tetrahedron's four vertices.
-std::vector<double> picture_values(const geometry::TetMesh& frame, const std::string& field,
-                                   const std::filesystem::path& path) {
+std::vector<double> picture_values(const geometry::TetMesh& frame, const std::string& field) {
   if (field == "von_mises") {
     const auto it = frame.cell_fields.find("von_mises_pa");
     if (it == frame.cell_fields.end() || it->second.count() != frame.tet_count())
-      throw IoError(path.string(), "frame has no von_mises_pa cell field of one value per tetrahedron");
+      throw Error("snapshots: the frame has no von_mises_pa cell field of one value per tetrahedron");
     std::vector<double> out(frame.tet_count());
     for (std::size_t t = 0; t < out.size(); ++t)
       out[t] = it->second.values[t * static_cast<std::size_t>(it->second.components)];
@@ -52,7 +50,7 @@ std::vector<double> picture_values(const geometry::TetMesh& frame, const std::st
   }
   const auto it = frame.point_fields.find("displacement_mm");
   if (it == frame.point_fields.end() || it->second.components != 3 || it->second.count() != frame.vertex_count())
-    throw IoError(path.string(), "frame has no displacement_mm point field of 3 values per vertex");
+    throw Error("snapshots: the frame has no displacement_mm point field of 3 values per vertex");
   const auto& d = it->second.values;
   std::vector<double> out(frame.tet_count(), 0.0);
   for (std::size_t t = 0; t < out.size(); ++t) {
@@ -64,28 +62,57 @@ std::vector<double> picture_values(const geometry::TetMesh& frame, const std::st
   return out;
 }
 
-/// Pictures of the frames run_scene wrote: frame indices 0, every, 2·every, … and the last.
-/// The camera frames the union of all pictured frames' bounding boxes and the colour range is
-/// the min..max of the value over all of them, so the pictures compare.
-nlohmann::json write_snapshots(const Options& o, std::int64_t frames, const FileBatch& outputs, Progress* progress) {
+/// The frames to picture, kept in memory as run_scene hands them over (io::SceneFrameListener):
+/// frame indices 0, every, 2·every, … and the last (which is known only when the run ends, so
+/// the latest frame is always kept).
+class SnapshotFrames {
+ public:
+  explicit SnapshotFrames(const Options& o) : m_every(o.snapshot_every), m_field(o.snapshot_field) {}
+
+  void add(std::int64_t index, const geometry::TetMesh& mesh) {
+    if (m_tets.empty()) m_tets = mesh.tets;
+    Kept k{index, mesh.vertices, picture_values(mesh, m_field)};
+    if (index % m_every == 0) m_picked.push_back(std::move(k));
+    else m_latest = std::move(k);
+  }
+
+  /// The pictured frames in order, once the run has ended.
+  struct Kept {
+    std::int64_t index = 0;
+    std::vector<Vec3> vertices;   ///< mm
+    std::vector<double> values;   ///< one per tetrahedron
+  };
+  [[nodiscard]] std::vector<Kept> finish() {
+    std::vector<Kept> out = std::move(m_picked);
+    if (m_latest && (out.empty() || m_latest->index > out.back().index)) out.push_back(std::move(*m_latest));
+    return out;
+  }
+  [[nodiscard]] const std::vector<Tet>& tets() const { return m_tets; }
+
+ private:
+  std::int64_t m_every;
+  std::string m_field;
+  std::vector<Tet> m_tets;
+  std::vector<Kept> m_picked;
+  std::optional<Kept> m_latest;
+};
+
+/// Pictures of the kept frames. The camera frames the union of all pictured frames' bounding
+/// boxes and the colour range is the min..max of the value over all of them, so the pictures
+/// compare.
+nlohmann::json write_snapshots(const Options& o, SnapshotFrames& frames, Progress* progress) {
   const auto [w, h] = parse_picture_size(o.snapshot_size, "--snapshot-size");
   SnapshotWriter writer(o.snapshots, {.width_px = w, .height_px = h, .azimuth_deg = 20.0, .elevation_deg = 15.0});
-  std::vector<std::int64_t> picked;
-  for (std::int64_t f = 0; f < frames; ++f)
-    if (f % o.snapshot_every == 0 || f == frames - 1) picked.push_back(f);
-  const std::filesystem::path out_dir(o.out_dir);
-  // The frames are still staged (written with the run's other outputs at the end).
-  auto frame_path = [&](std::int64_t f) { return outputs.staged(out_dir / fmt::format("frame_{:04d}.vtu", f)); };
+  const auto picked = frames.finish();
   // Pass 1: bounds and value range over the whole run.
   Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   double vmin = std::numeric_limits<double>::infinity(), vmax = -vmin;
-  for (const auto f : picked) {
-    const auto mesh = io::read_tet_mesh(frame_path(f));
-    for (const Vec3& p : mesh.vertices) {
+  for (const auto& f : picked) {
+    for (const Vec3& p : f.vertices) {
       lo = lo.cwiseMin(p);
       hi = hi.cwiseMax(p);
     }
-    for (const double v : picture_values(mesh, o.snapshot_field, frame_path(f))) {
+    for (const double v : f.values) {
       vmin = std::min(vmin, v);
       vmax = std::max(vmax, v);
     }
@@ -97,9 +124,10 @@ nlohmann::json write_snapshots(const Options& o, std::int64_t frames, const File
   const std::string cell_name = "snapshot_value";
   for (std::size_t k = 0; k < picked.size(); ++k) {
     check_cancel(progress);
-    auto mesh = io::read_tet_mesh(frame_path(picked[k]));
-    const auto values = picture_values(mesh, o.snapshot_field, frame_path(picked[k]));
-    mesh.cell_fields[cell_name] = geometry::Field{1, values};
+    geometry::TetMesh mesh;
+    mesh.vertices = picked[k].vertices;
+    mesh.tets = frames.tets();
+    mesh.cell_fields[cell_name] = geometry::Field{1, picked[k].values};
     viz::Renderer ren(w, h);
     viz::ClipPlane keep_all;  // a plane beyond the union box clips nothing
     keep_all.normal = Vec3(1, 0, 0);
@@ -110,7 +138,7 @@ nlohmann::json write_snapshots(const Options& o, std::int64_t frames, const File
     report(progress, double(k + 1) / double(picked.size()), "snapshots");
   }
   nlohmann::json frames_json = nlohmann::json::array();
-  for (const auto f : picked) frames_json.push_back(f);
+  for (const auto& f : picked) frames_json.push_back(f.index);
   return {{"snapshots", writer.files_json()},
           {"snapshot_frames", frames_json},
           {"snapshot_field", o.snapshot_field == "von_mises" ? "von_mises_pa" : "displacement_magnitude_mm"},
@@ -136,21 +164,19 @@ void run(const Options& o, const GlobalOptions& g) {
   std::size_t pictures = 0;
   io::SceneRunResult result;
   try {
-    result = io::run_scene(scene, out_dir, progress.get(), &outputs);
+    // The pictures are drawn from the frames as the run hands them over, not read back.
+    SnapshotFrames frames(o);
+    io::SceneFrameListener keep;
+    if (!o.snapshots.empty()) keep = [&frames](std::int64_t index, const geometry::TetMesh& mesh) { frames.add(index, mesh); };
+    result = io::run_scene(scene, out_dir, progress.get(), &outputs, {}, keep);
     write_energy_plot(outputs.stage(out_dir / "energy.png"), result);
     if (!o.snapshots.empty()) {
-      const nlohmann::json snap = write_snapshots(o, result.frames, outputs, progress.get());
+      const nlohmann::json snap = write_snapshots(o, frames, progress.get());
       pictures = snap["snapshots"].size();
-      // run_scene staged report.json: add the pictures to it.
-      const auto report_path = outputs.staged(out_dir / "report.json");
-      std::ifstream in(report_path);
-      std::stringstream text;
-      text << in.rdbuf();
-      nlohmann::json report_json = nlohmann::json::parse(text.str(), nullptr, false);
-      if (report_json.is_discarded() || !report_json.is_object())
-        throw IoError((out_dir / "report.json").string(), "cannot read back the run's report to add the snapshots");
+      // run_scene staged report.json: stage it again with the pictures added.
+      nlohmann::json report_json = io::scene_report(scene, result);
       report_json.update(snap);
-      write_text_file(report_path.string(), report_json.dump(2) + "\n");
+      write_text_file(outputs.staged(out_dir / "report.json").string(), report_json.dump(2) + "\n");
     }
     outputs.commit();
   } catch (...) {

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -27,6 +28,7 @@
 #include "ido/sim/fem_neo_hookean.h"
 #include "ido/sim/generators.h"
 #include "ido/sim/mass_spring.h"
+#include "ido/sim/mls.h"
 #include "ido/sim/units.h"
 #include "ido/sim/world.h"
 
@@ -99,6 +101,46 @@ void bind_sim(py::module_& m) {
           py::arg("poisson_ratio") = 0.3, py::arg("first_particle") = 0,
           "Finite elements on a body added with add_tet_body (its rest shape: the particles' present positions). "
           "kind: corotational, linear or neo_hookean. Returns the model's index.")
+      .def(
+          "set_material",
+          [](World& w, std::size_t model, std::optional<double> youngs_modulus_pa, std::optional<double> poisson_ratio) {
+            if (model >= w.models().size())
+              throw InvalidInput("set_material: model " + std::to_string(model) + " does not exist (" +
+                                 std::to_string(w.models().size()) + " models)");
+            auto& target = *w.models()[model];
+            if (auto* fem = dynamic_cast<sim::TetFemModel*>(&target)) {
+              fem->set_material({.youngs_modulus_pa = youngs_modulus_pa.value_or(fem->material().youngs_modulus_pa),
+                                 .poisson_ratio = poisson_ratio.value_or(fem->material().poisson_ratio)});
+            } else if (auto* mls = dynamic_cast<sim::MlsElasticity*>(&target)) {
+              const auto& old = mls->options().material;
+              mls->set_material({.youngs_modulus_pa = youngs_modulus_pa.value_or(old.youngs_modulus_pa),
+                                 .poisson_ratio = poisson_ratio.value_or(old.poisson_ratio)});
+            } else {
+              throw InvalidInput(
+                  fmt::format("set_material: model {} ({}) has no elastic material", model, target.kind()));
+            }
+          },
+          py::arg("model"), py::kw_only(), py::arg("youngs_modulus_pa") = py::none(),
+          py::arg("poisson_ratio") = py::none(),
+          "Changes an FEM (or MLS) model's Young's modulus (Pa) and/or Poisson ratio between steps; "
+          "model is the index add_fem returned. Raises ValueError naming a value out of range.")
+      .def(
+          "set_springs",
+          [](World& w, std::size_t model, std::optional<double> stiffness_n_per_mm,
+             std::optional<double> damping_n_s_per_mm) {
+            if (model >= w.models().size())
+              throw InvalidInput("set_springs: model " + std::to_string(model) + " does not exist (" +
+                                 std::to_string(w.models().size()) + " models)");
+            auto* springs = dynamic_cast<sim::MassSpring*>(w.models()[model].get());
+            if (!springs)
+              throw InvalidInput(fmt::format("set_springs: model {} ({}) is not a mass-spring model", model,
+                                             w.models()[model]->kind()));
+            if (stiffness_n_per_mm) springs->set_stiffness(*stiffness_n_per_mm);
+            if (damping_n_s_per_mm) springs->set_damping(*damping_n_s_per_mm);
+          },
+          py::arg("model"), py::kw_only(), py::arg("stiffness_n_per_mm") = py::none(),
+          py::arg("damping_n_s_per_mm") = py::none(),
+          "Changes every spring's stiffness (N/mm) and/or damping (N·s/mm) of a mass-spring model between steps.")
       .def(
           "add_springs",
           [](World& w, const geometry::TetMesh& mesh, double stiffness_n_per_mm, double damping_n_s_per_mm,
@@ -190,7 +232,9 @@ void bind_sim(py::module_& m) {
           },
           py::arg("name"), py::arg("fn"),
           "Registers a scheme written in Python: fn(world, dt_s) advances the world by one step (read "
-          "accelerations(), assign velocities and positions). Select it with world.integrator = name.")
+          "accelerations(), assign velocities and positions). fn may be an object with state (a class with "
+          "__call__, e.g. a Newmark scheme keeping its acceleration): the world calls the same object every step. "
+          "Select it with world.integrator = name.")
       .def(
           "accelerations",
           [](World& w) {

@@ -154,3 +154,67 @@ def test_bad_input_raises_value_error():
 def test_reprs_say_what_objects_hold():
     w = ido.World()
     assert repr(w) == "<ido.World 0 particles, 0 force models, integrator symplectic_euler, step 0>"
+
+
+class CarriedNewmark:
+    """Explicit Newmark (beta = 0, gamma = 1/2) that keeps the acceleration of the end of one step
+    for the next: state a plain function cannot hold. One force evaluation per step after the first."""
+
+    def __init__(self, fixed):
+        self.fixed = fixed
+        self.a = None
+        self.next_step = -1
+        self.evaluations = 0
+
+    def accelerations(self, world):
+        self.evaluations += 1
+        a = world.accelerations()
+        a[self.fixed] = 0.0
+        return a
+
+    def __call__(self, world, dt):
+        if self.a is None or world.step_count != self.next_step:
+            self.a = self.accelerations(world)
+        v = world.velocities + 0.5 * dt * self.a
+        world.positions = world.positions + dt * v
+        self.a = self.accelerations(world)
+        world.velocities = v + 0.5 * dt * self.a
+        self.next_step = world.step_count + 1
+
+
+def test_python_integrator_with_state_keeps_it_across_steps_and_switches():
+    _, built_in = beam_world()
+    _, python = beam_world()
+    newmark = CarriedNewmark(python.fixed)
+    python.add_integrator("newmark", newmark)
+    for w, scheme in ((built_in, "velocity_verlet"), (python, "newmark")):
+        w.integrator = scheme
+        w.step(2e-4, steps=30)
+        w.integrator = "rk4"  # switched away and back: the scheme notices and starts afresh
+        w.step(2e-4, steps=5)
+        w.integrator = scheme
+        w.step(2e-4, steps=30)
+    # Velocity Verlet's trajectory, with 1 + 30 + 1 + 30 force evaluations instead of 2 per step.
+    np.testing.assert_allclose(python.positions, built_in.positions, rtol=0, atol=1e-10)
+    assert newmark.evaluations == 62
+
+
+def test_set_material_scales_the_static_deflection():
+    beam, w = beam_world(kind="linear")
+    rest = w.positions
+    w.solve_static(force_tolerance_n=1e-12)
+    sag = (rest - w.positions)[:, 2].max()
+    w.positions = rest
+    w.set_material(0, youngs_modulus_pa=4e5)  # twice as stiff: linear elasticity sags half as far
+    w.solve_static(force_tolerance_n=1e-12)
+    assert (rest - w.positions)[:, 2].max() == pytest.approx(sag / 2, rel=1e-9)
+    with pytest.raises(ValueError, match="youngs_modulus_pa"):
+        w.set_material(0, youngs_modulus_pa=-1.0)
+    with pytest.raises(ValueError, match="poisson_ratio"):
+        w.set_material(0, poisson_ratio=0.5)
+    springs = w.add_springs(beam, stiffness_n_per_mm=1e-3)
+    with pytest.raises(ValueError, match="elastic material"):
+        w.set_material(springs, youngs_modulus_pa=1e5)
+    with pytest.raises(ValueError, match="stiffness_n_per_mm"):
+        w.set_springs(springs, stiffness_n_per_mm=-1.0)
+    w.set_springs(springs, stiffness_n_per_mm=2e-3, damping_n_s_per_mm=1e-4)

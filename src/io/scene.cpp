@@ -2,7 +2,6 @@
 #include "ido/io/scene.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <fstream>
 #include <initializer_list>
@@ -547,6 +546,55 @@ Scene load_scene(const std::filesystem::path& path) {
 
 // ---- running -----------------------------------------------------------------------------
 
+sim::RunOptions run_options(const Scene& scene) {
+  sim::RunOptions o;
+  o.dt_s = scene.dt_s;
+  o.steps = scene.steps;
+  o.frame_every = scene.output_every;
+  o.label = scene.source.empty() ? std::string("scene") : scene.source;
+  constexpr double kFloorStrain = 1e-3;
+  double floor_mj = 0.0;
+  for (const auto& body : scene.bodies) {
+    double volume_mm3 = 0.0;
+    for (const auto& t : body.rest_mesh.tets)
+      volume_mm3 += std::abs(geometry::tet_signed_volume(
+          body.rest_mesh.vertices[static_cast<std::size_t>(t[0])], body.rest_mesh.vertices[static_cast<std::size_t>(t[1])],
+          body.rest_mesh.vertices[static_cast<std::size_t>(t[2])], body.rest_mesh.vertices[static_cast<std::size_t>(t[3])]));
+    floor_mj += 0.5 * body.material.youngs_modulus_pa * sim::kPascalToNPerMm2 * kFloorStrain * kFloorStrain * volume_mm3;
+  }
+  o.energy_floor_mj = floor_mj;
+  return o;
+}
+
+json scene_report(const Scene& scene, const SceneRunResult& result) {
+  const auto& world = scene.world;
+  std::size_t tets = 0;
+  for (const auto& body : scene.bodies) tets += body.rest_mesh.tets.size();
+  json report_json;
+  report_json["steps"] = scene.steps;
+  report_json["dt_s"] = scene.dt_s;
+  report_json["integrator"] = world.integrator();
+  report_json["particles"] = world.particles().size();
+  report_json["tetrahedra"] = tets;
+  report_json["frames"] = result.frames;
+  report_json["wall_time_s"] = result.wall_time_s;
+  const std::vector<double> ms =
+      result.step_ms.empty() ? std::vector<double>(4, 0.0) : percentiles(result.step_ms, {0.5, 0.9, 0.99, 1.0});
+  report_json["ms_per_step"] = {{"p50", ms[0]}, {"p90", ms[1]}, {"p99", ms[2]}, {"max", ms[3]}};
+  report_json["final_energy"] = to_json(result.final_energy);
+  double cg_sum = 0.0;
+  int cg_max = 0;
+  for (int c : result.cg_iterations) {
+    cg_sum += c;
+    cg_max = std::max(cg_max, c);
+  }
+  report_json["cg_iterations"] = {
+      {"mean", result.cg_iterations.empty() ? 0.0 : cg_sum / static_cast<double>(result.cg_iterations.size())},
+      {"max", cg_max},
+      {"total", cg_sum}};
+  return report_json;
+}
+
 namespace {
 
 geometry::Field tensor_field(const std::vector<Mat3>& m) {
@@ -559,71 +607,105 @@ geometry::Field tensor_field(const std::vector<Mat3>& m) {
   return f;
 }
 
-/// Watches a run for divergence (run_scene's doc comment gives the rule).
-class DivergenceWatch {
+/// The run's file outputs as an observer: a frame file per frame, then the .pvd index,
+/// energy.csv and report.json at the end, all staged in one batch.
+class SceneWriter final : public sim::RunObserver {
  public:
-  explicit DivergenceWatch(const Scene& scene) : m_scene(scene) {
+  SceneWriter(const Scene& scene, const std::filesystem::path& out_dir, FileBatch& batch,
+              const SceneFrameListener& on_frame)
+      : m_scene(scene), m_out_dir(out_dir), m_batch(batch), m_on_frame(on_frame) {
     const auto& world = scene.world;
-    const auto& p = world.particles();
-    m_start = p.positions();
-    m_coefficient_n.assign(p.size(), 0.0);
-    std::vector<Vec3> load(p.size(), Vec3::Zero());
-    for (const auto& l : world.external().point_loads) load[static_cast<std::size_t>(l.particle)] += l.force_n;
-    const double g = world.external().gravity_mm_s2.norm();
-    for (std::size_t i = 0; i < p.size(); ++i)
-      m_coefficient_n[i] = load[i].norm() + p.masses()[i] * g * sim::kKgMmPerS2ToNewton;
-    const auto e = sim::energies(world);
-    m_start_mj = e.kinetic_mj + e.elastic_total_mj();
-    constexpr double kFloorStrain = 1e-3;
-    for (const auto& body : scene.bodies) {
-      double volume_mm3 = 0.0;
-      for (const auto& t : body.rest_mesh.tets)
-        volume_mm3 += std::abs(geometry::tet_signed_volume(
-            body.rest_mesh.vertices[static_cast<std::size_t>(t[0])], body.rest_mesh.vertices[static_cast<std::size_t>(t[1])],
-            body.rest_mesh.vertices[static_cast<std::size_t>(t[2])], body.rest_mesh.vertices[static_cast<std::size_t>(t[3])]));
-      m_floor_mj += 0.5 * body.material.youngs_modulus_pa * sim::kPascalToNPerMm2 * kFloorStrain * kFloorStrain * volume_mm3;
+    // Diagnostic element models (no force) for bodies whose model has no elements.
+    m_stress_models.resize(scene.bodies.size());
+    for (std::size_t b = 0; b < scene.bodies.size(); ++b) {
+      const auto& body = scene.bodies[b];
+      if (body.stress_model_index < world.models().size()) continue;
+      std::vector<Tet> tets = body.rest_mesh.tets;
+      for (auto& t : tets)
+        for (auto& i : t) i += body.first_particle;
+      std::vector<Vec3> rest(world.particles().size(), Vec3::Zero());
+      for (std::size_t i = 0; i < body.rest_mesh.vertex_count(); ++i)
+        rest[static_cast<std::size_t>(body.first_particle) + i] = body.rest_mesh.vertices[i];
+      m_stress_models[b] = std::make_unique<sim::CorotationalFem>(tets, rest, body.material);
+    }
+    // Combined rest mesh of all bodies.
+    for (std::size_t b = 0; b < scene.bodies.size(); ++b) {
+      const auto& body = scene.bodies[b];
+      for (const auto& v : body.rest_mesh.vertices) m_rest.vertices.push_back(v);
+      for (auto t : body.rest_mesh.tets) {
+        for (auto& i : t) i += body.first_particle;
+        m_rest.tets.push_back(t);
+        m_body_id.push_back(static_cast<double>(b));
+      }
     }
   }
 
-  /// After each step: every position and velocity finite.
-  void check_finite(std::int64_t step) const {
-    const auto& p = m_scene.world.particles();
-    for (std::size_t i = 0; i < p.size(); ++i)
-      if (!p.positions()[i].allFinite() || !p.velocities()[i].allFinite())
-        fail(step, fmt::format("particle {} has a non-finite {}", i,
-                               p.positions()[i].allFinite() ? "velocity" : "position"));
+  void on_frame(const sim::World& world, std::int64_t index, std::int64_t /*step*/) override {
+    const auto mesh = frame(world);
+    const std::string name = fmt::format("frame_{:04d}.vtu", index);
+    write_tet_mesh(m_batch.stage(m_out_dir / name), mesh);
+    m_pvd.push_back({world.time_s(), name});
+    if (m_on_frame) m_on_frame(index, mesh);
   }
 
-  /// Before a sample or frame: the energy within its bound.
-  void check_energy(std::int64_t step, const sim::EnergyReport& e) const {
-    const double mech_mj = e.kinetic_mj + e.elastic_total_mj();
-    if (!std::isfinite(mech_mj) || !std::isfinite(e.gravitational_mj))
-      fail(step, "the energy is not finite");
-    const auto& p = m_scene.world.particles();
-    double work_mj = 0.0;
-    for (std::size_t i = 0; i < m_start.size(); ++i)
-      if (m_coefficient_n[i] > 0.0)
-        work_mj += m_coefficient_n[i] * ((p.positions()[i] - m_start[i]).norm() + p.velocities()[i].norm() * m_scene.dt_s);
-    const double bound_mj = m_start_mj + work_mj + m_floor_mj;
-    if (mech_mj > kDivergenceEnergyFactor * bound_mj)
-      fail(step, fmt::format("kinetic + elastic energy {:.3g} mJ is over {:g} times what the start state, loads and "
-                             "gravity can have given ({:.3g} mJ)",
-                             mech_mj, kDivergenceEnergyFactor, bound_mj));
+  void on_finish(const sim::World& /*world*/, const sim::RunResult& result) override {
+    write_pvd(m_batch.stage(m_out_dir / "simulation.pvd"), m_pvd);
+    std::string csv = "time_s,kinetic_mj,elastic_mj,gravitational_mj,total_mj\n";
+    for (std::size_t i = 0; i < result.time_s.size(); ++i)
+      csv += fmt::format("{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}\n", result.time_s[i], result.kinetic_mj[i],
+                         result.elastic_mj[i], result.gravitational_mj[i], result.total_mj[i]);
+    write_file_atomically(m_batch.stage(m_out_dir / "energy.csv"), [&](std::ostream& os) { os << csv; }, false);
+
+    const json report_json = scene_report(m_scene, result);
+    write_file_atomically(m_batch.stage(m_out_dir / "report.json"),
+                          [&](std::ostream& os) { os << report_json.dump(2) << "\n"; }, false);
   }
 
  private:
-  [[noreturn]] void fail(std::int64_t step, const std::string& cause) const {
-    throw InvalidInput(fmt::format("{}: simulation diverged at step {} of {} (t = {:.6g} s): {}; reduce dt_s (now {:g}) "
-                                   "or use implicit_euler",
-                                   m_scene.source.empty() ? std::string("scene") : m_scene.source, step, m_scene.steps,
-                                   m_scene.world.time_s(), cause, m_scene.dt_s));
+  /// The bodies at the world's current state with the frame's fields.
+  [[nodiscard]] geometry::TetMesh frame(const sim::World& world) const {
+    const auto& x = world.particles().positions();
+    const auto& v = world.particles().velocities();
+    const auto& rest = m_rest.vertices;
+    geometry::TetMesh out;
+    out.tets = m_rest.tets;
+    out.vertices.assign(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(rest.size()));
+    geometry::Field disp{3, {}}, vel{3, {}};
+    for (std::size_t i = 0; i < rest.size(); ++i)
+      for (int c = 0; c < 3; ++c) {
+        disp.values.push_back(x[i][c] - rest[i][c]);
+        vel.values.push_back(v[i][c]);
+      }
+    out.point_fields["displacement_mm"] = std::move(disp);
+    out.point_fields["velocity_mm_s"] = std::move(vel);
+    std::vector<Mat3> strain, stress;
+    std::vector<double> vm;
+    for (std::size_t b = 0; b < m_scene.bodies.size(); ++b) {
+      const auto& body = m_scene.bodies[b];
+      const sim::ForceModel& m = body.stress_model_index < world.models().size()
+                                     ? *world.models()[body.stress_model_index]
+                                     : *m_stress_models[b];
+      const auto f = m.element_fields(world.particles());
+      if (!f) continue;
+      strain.insert(strain.end(), f->green_strain.begin(), f->green_strain.end());
+      stress.insert(stress.end(), f->cauchy_stress_pa.begin(), f->cauchy_stress_pa.end());
+      vm.insert(vm.end(), f->von_mises_pa.begin(), f->von_mises_pa.end());
+    }
+    out.cell_fields["green_strain"] = tensor_field(strain);
+    out.cell_fields["cauchy_stress_pa"] = tensor_field(stress);
+    out.cell_fields["von_mises_pa"] = geometry::Field{1, vm};
+    out.cell_fields["body"] = geometry::Field{1, m_body_id};
+    return out;
   }
 
   const Scene& m_scene;
-  std::vector<Vec3> m_start;            ///< positions at the start (mm)
-  std::vector<double> m_coefficient_n;  ///< |Σ point loads| + m |g| per particle (N)
-  double m_start_mj = 0.0;
-  double m_floor_mj = 0.0;
+  std::filesystem::path m_out_dir;
+  FileBatch& m_batch;
+  const SceneFrameListener& m_on_frame;
+  std::vector<std::unique_ptr<sim::CorotationalFem>> m_stress_models;
+  geometry::TetMesh m_rest;            ///< all bodies at rest, particle-indexed tetrahedra
+  std::vector<double> m_body_id;       ///< body of each tetrahedron
+  std::vector<PvdEntry> m_pvd;
 };
 
 /// Folders that create_directories(@p dir) would make, outermost first.
@@ -638,145 +720,10 @@ std::vector<std::filesystem::path> missing_folders(const std::filesystem::path& 
   return missing;
 }
 
-/// The run itself; run_scene() commits or discards what it staged in @p batch.
-SceneRunResult run_steps(Scene& scene, const std::filesystem::path& out_dir, Progress* progress, FileBatch& batch) {
-  auto& world = scene.world;
-  // Diagnostic element models (no force) for bodies whose model has no elements.
-  std::vector<std::unique_ptr<sim::CorotationalFem>> stress_models(scene.bodies.size());
-  for (std::size_t b = 0; b < scene.bodies.size(); ++b) {
-    const auto& body = scene.bodies[b];
-    if (body.stress_model_index < world.models().size()) continue;
-    std::vector<Tet> tets = body.rest_mesh.tets;
-    for (auto& t : tets)
-      for (auto& i : t) i += body.first_particle;
-    std::vector<Vec3> rest(world.particles().size(), Vec3::Zero());
-    for (std::size_t i = 0; i < body.rest_mesh.vertex_count(); ++i)
-      rest[static_cast<std::size_t>(body.first_particle) + i] = body.rest_mesh.vertices[i];
-    stress_models[b] = std::make_unique<sim::CorotationalFem>(tets, rest, body.material);
-  }
-  // Combined rest mesh of all bodies.
-  geometry::TetMesh frame;
-  std::vector<double> body_id;
-  for (std::size_t b = 0; b < scene.bodies.size(); ++b) {
-    const auto& body = scene.bodies[b];
-    for (const auto& v : body.rest_mesh.vertices) frame.vertices.push_back(v);
-    for (auto t : body.rest_mesh.tets) {
-      for (auto& i : t) i += body.first_particle;
-      frame.tets.push_back(t);
-      body_id.push_back(static_cast<double>(b));
-    }
-  }
-  const std::vector<Vec3> rest_positions = frame.vertices;
-  std::vector<PvdEntry> pvd;
-  auto write_frame = [&](std::int64_t index) {
-    const auto& x = world.particles().positions();
-    const auto& v = world.particles().velocities();
-    geometry::TetMesh out;
-    out.tets = frame.tets;
-    out.vertices.assign(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(rest_positions.size()));
-    geometry::Field disp{3, {}}, vel{3, {}};
-    for (std::size_t i = 0; i < rest_positions.size(); ++i)
-      for (int c = 0; c < 3; ++c) {
-        disp.values.push_back(x[i][c] - rest_positions[i][c]);
-        vel.values.push_back(v[i][c]);
-      }
-    out.point_fields["displacement_mm"] = std::move(disp);
-    out.point_fields["velocity_mm_s"] = std::move(vel);
-    std::vector<Mat3> strain, stress;
-    std::vector<double> vm;
-    for (std::size_t b = 0; b < scene.bodies.size(); ++b) {
-      const auto& body = scene.bodies[b];
-      const sim::ForceModel& m = body.stress_model_index < world.models().size()
-                                     ? *world.models()[body.stress_model_index]
-                                     : *stress_models[b];
-      const auto f = m.element_fields(world.particles());
-      if (!f) continue;
-      strain.insert(strain.end(), f->green_strain.begin(), f->green_strain.end());
-      stress.insert(stress.end(), f->cauchy_stress_pa.begin(), f->cauchy_stress_pa.end());
-      vm.insert(vm.end(), f->von_mises_pa.begin(), f->von_mises_pa.end());
-    }
-    out.cell_fields["green_strain"] = tensor_field(strain);
-    out.cell_fields["cauchy_stress_pa"] = tensor_field(stress);
-    out.cell_fields["von_mises_pa"] = geometry::Field{1, vm};
-    out.cell_fields["body"] = geometry::Field{1, body_id};
-    const std::string name = fmt::format("frame_{:04d}.vtu", index);
-    write_tet_mesh(batch.stage(out_dir / name), out);
-    pvd.push_back({world.time_s(), name});
-  };
-
-  SceneRunResult result;
-  const std::int64_t energy_every = std::max<std::int64_t>(1, scene.steps / 2000);
-  auto sample = [&](const sim::EnergyReport& e) {
-    result.time_s.push_back(world.time_s());
-    result.kinetic_mj.push_back(e.kinetic_mj);
-    result.elastic_mj.push_back(e.elastic_total_mj());
-    result.gravitational_mj.push_back(e.gravitational_mj);
-    result.total_mj.push_back(e.total_mj());
-  };
-  const DivergenceWatch watch(scene);
-  sample(sim::energies(world));
-  write_frame(result.frames++);
-  const auto t_start = std::chrono::steady_clock::now();
-  for (std::int64_t s = 1; s <= scene.steps; ++s) {
-    check_cancel(progress);
-    const auto t0 = std::chrono::steady_clock::now();
-    world.step(scene.dt_s);
-    const auto t1 = std::chrono::steady_clock::now();
-    result.step_ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
-    result.cg_iterations.push_back(world.last_step().cg_iterations);
-    watch.check_finite(s);
-    const bool sample_now = s % energy_every == 0 || s == scene.steps;
-    const bool frame_now = s % scene.output_every == 0 || s == scene.steps;
-    if (sample_now || frame_now) {
-      // Checked before anything of this state is kept: a diverged state reaches no file.
-      const auto e = sim::energies(world);
-      watch.check_energy(s, e);
-      if (sample_now) sample(e);
-      if (frame_now) write_frame(result.frames++);
-    }
-    report(progress, static_cast<double>(s) / static_cast<double>(scene.steps), "simulating");
-  }
-  result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
-
-  write_pvd(batch.stage(out_dir / "simulation.pvd"), pvd);
-  std::string csv = "time_s,kinetic_mj,elastic_mj,gravitational_mj,total_mj\n";
-  for (std::size_t i = 0; i < result.time_s.size(); ++i)
-    csv += fmt::format("{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}\n", result.time_s[i], result.kinetic_mj[i],
-                       result.elastic_mj[i], result.gravitational_mj[i], result.total_mj[i]);
-  write_file_atomically(batch.stage(out_dir / "energy.csv"), [&](std::ostream& os) { os << csv; }, false);
-
-  json report_json;
-  report_json["steps"] = scene.steps;
-  report_json["dt_s"] = scene.dt_s;
-  report_json["integrator"] = world.integrator();
-  report_json["particles"] = world.particles().size();
-  report_json["tetrahedra"] = frame.tets.size();
-  report_json["frames"] = result.frames;
-  report_json["wall_time_s"] = result.wall_time_s;
-  const std::vector<double> ms =
-      result.step_ms.empty() ? std::vector<double>(4, 0.0) : percentiles(result.step_ms, {0.5, 0.9, 0.99, 1.0});
-  report_json["ms_per_step"] = {{"p50", ms[0]}, {"p90", ms[1]}, {"p99", ms[2]}, {"max", ms[3]}};
-  result.final_energy = sim::energies(world);
-  report_json["final_energy"] = to_json(result.final_energy);
-  double cg_sum = 0.0;
-  int cg_max = 0;
-  for (int c : result.cg_iterations) {
-    cg_sum += c;
-    cg_max = std::max(cg_max, c);
-  }
-  report_json["cg_iterations"] = {
-      {"mean", result.cg_iterations.empty() ? 0.0 : cg_sum / static_cast<double>(result.cg_iterations.size())},
-      {"max", cg_max},
-      {"total", cg_sum}};
-  write_file_atomically(batch.stage(out_dir / "report.json"), [&](std::ostream& os) { os << report_json.dump(2) << "\n"; },
-                        false);
-  return result;
-}
-
 }  // namespace
 
-SceneRunResult run_scene(Scene& scene, const std::filesystem::path& out_dir, Progress* progress,
-                         FileBatch* outputs) {
+SceneRunResult run_scene(Scene& scene, const std::filesystem::path& out_dir, Progress* progress, FileBatch* outputs,
+                         std::span<sim::RunObserver* const> observers, const SceneFrameListener& on_frame) {
   const auto created = missing_folders(out_dir);
   std::error_code ec;
   std::filesystem::create_directories(out_dir, ec);
@@ -784,7 +731,10 @@ SceneRunResult run_scene(Scene& scene, const std::filesystem::path& out_dir, Pro
   FileBatch own_batch;
   FileBatch& batch = outputs ? *outputs : own_batch;
   try {
-    auto result = run_steps(scene, out_dir, progress, batch);
+    SceneWriter writer(scene, out_dir, batch, on_frame);
+    std::vector<sim::RunObserver*> all{&writer};
+    all.insert(all.end(), observers.begin(), observers.end());
+    auto result = sim::run(scene.world, run_options(scene), all, progress);
     if (!outputs) batch.commit();
     return result;
   } catch (...) {

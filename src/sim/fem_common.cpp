@@ -6,6 +6,7 @@
 #include <string>
 
 #include <Eigen/Eigenvalues>
+#include <fmt/format.h>
 
 #include "gather.h"
 #include "ido/core/error.h"
@@ -23,6 +24,13 @@ Lame lame_parameters(const ElasticMaterial& m) {
                        std::to_string(m.poisson_ratio));
   const double e = m.youngs_modulus_pa * kPascalToNPerMm2, nu = m.poisson_ratio;
   return {e / (2.0 * (1.0 + nu)), e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))};
+}
+
+void check_material(const ElasticMaterial& m, std::string_view where) {
+  if (!(m.youngs_modulus_pa > 0.0) || !std::isfinite(m.youngs_modulus_pa))
+    throw InvalidInput(fmt::format("{}: youngs_modulus_pa must be > 0 and finite, got {}", where, m.youngs_modulus_pa));
+  if (!(m.poisson_ratio > -1.0 && m.poisson_ratio < 0.5))
+    throw InvalidInput(fmt::format("{}: poisson_ratio must be in (-1, 0.5), got {}", where, m.poisson_ratio));
 }
 
 double von_mises(const Mat3& sigma) {
@@ -118,7 +126,7 @@ Mat3 extract_rotation(const Mat3& F, Eigen::Quaterniond& q, int max_iterations) 
 
 TetFemModel::TetFemModel(std::vector<Tet> tets, std::span<const Vec3> rest_positions_mm,
                          const ElasticMaterial& material)
-    : m_tets(std::move(tets)), m_lame(lame_parameters(material)) {
+    : m_tets(std::move(tets)), m_material(material), m_lame(lame_parameters(material)) {
   if (m_tets.empty()) throw InvalidInput("FEM model: no tetrahedra");
   m_dm_inv.resize(m_tets.size());
   m_volume.resize(m_tets.size());
@@ -221,6 +229,24 @@ double TetFemModel::energy(const Particles& particles) const {
   for (std::size_t e = 0; e < m_tets.size(); ++e)
     e_elem[e] = m_volume[e] * energy_density(e, deformation_gradient(x, m_tets[e], m_dm_inv[e]));
   return detail::ordered_sum(e_elem);
+}
+
+void TetFemModel::set_material(const ElasticMaterial& material) {
+  check_material(material, kind());
+  m_lame = lame_parameters(material);
+  m_material = material;
+}
+
+void TetFemModel::set_youngs_modulus(double youngs_modulus_pa) {
+  ElasticMaterial m = m_material;
+  m.youngs_modulus_pa = youngs_modulus_pa;
+  set_material(m);
+}
+
+void TetFemModel::set_poisson_ratio(double poisson_ratio) {
+  ElasticMaterial m = m_material;
+  m.poisson_ratio = poisson_ratio;
+  set_material(m);
 }
 
 std::vector<BlockIndex> TetFemModel::stiffness_pattern() const {

@@ -6,6 +6,8 @@
 #include <set>
 #include <string>
 
+#include <fmt/format.h>
+
 #include "gather.h"
 #include "ido/core/error.h"
 
@@ -31,6 +33,18 @@ MassSpring::MassSpring(std::vector<Spring> springs) : m_springs(std::move(spring
     max_index = std::max({max_index, sp.a, sp.b});
   }
   detail::build_gather(targets, static_cast<std::size_t>(max_index + 1), m_offsets, m_sources);
+}
+
+void MassSpring::set_stiffness(double stiffness_n_per_mm) {
+  if (!(stiffness_n_per_mm >= 0.0) || !std::isfinite(stiffness_n_per_mm))
+    throw InvalidInput(fmt::format("mass_spring: stiffness_n_per_mm must be >= 0 and finite, got {}", stiffness_n_per_mm));
+  for (auto& sp : m_springs) sp.stiffness_n_per_mm = stiffness_n_per_mm;
+}
+
+void MassSpring::set_damping(double damping_n_s_per_mm) {
+  if (!(damping_n_s_per_mm >= 0.0) || !std::isfinite(damping_n_s_per_mm))
+    throw InvalidInput(fmt::format("mass_spring: damping_n_s_per_mm must be >= 0 and finite, got {}", damping_n_s_per_mm));
+  for (auto& sp : m_springs) sp.damping_n_s_per_mm = damping_n_s_per_mm;
 }
 
 MassSpring MassSpring::from_tet_edges(const geometry::TetMesh& mesh, std::int32_t first_particle,

@@ -7,6 +7,7 @@
 #include <unordered_map>
 
 #include <Eigen/Eigenvalues>
+#include <fmt/format.h>
 
 #include "gather.h"
 #include "ido/core/error.h"
@@ -30,6 +31,19 @@ Mat3 cofactor(const Mat3& F) {
   return c;
 }
 }  // namespace
+
+void MlsElasticity::set_material(const ElasticMaterial& material) {
+  check_material(material, kind());
+  m_lame = lame_parameters(material);
+  m_options.material = material;
+}
+
+void MlsElasticity::set_volume_stiffness(double volume_stiffness_pa) {
+  if (!(volume_stiffness_pa >= 0.0) || !std::isfinite(volume_stiffness_pa))
+    throw InvalidInput(fmt::format("mls_elasticity: volume_stiffness_pa must be >= 0 and finite, got {}", volume_stiffness_pa));
+  m_options.volume_stiffness_pa = volume_stiffness_pa;
+  m_kv = volume_stiffness_pa * kPascalToNPerMm2;
+}
 
 MlsElasticity::MlsElasticity(const Particles& particles, std::vector<std::int32_t> phyxels,
                              const MlsOptions& options)

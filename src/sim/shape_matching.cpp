@@ -7,6 +7,7 @@
 #include <unordered_map>
 
 #include <Eigen/LU>
+#include <fmt/format.h>
 
 #include "gather.h"
 #include "ido/core/error.h"
@@ -171,6 +172,17 @@ double ShapeMatching::energy(const Particles& particles) const {
            (g[s++] - x[static_cast<std::size_t>(i)]).squaredNorm();
     }
   return e * kKgMmPerS2ToNewton;
+}
+
+void ShapeMatching::set_stiffness(double stiffness_per_s2) {
+  if (!(stiffness_per_s2 >= 0.0) || !std::isfinite(stiffness_per_s2))
+    throw InvalidInput(fmt::format("shape_matching: stiffness_per_s2 must be >= 0 and finite, got {}", stiffness_per_s2));
+  m_options.stiffness_per_s2 = stiffness_per_s2;
+}
+
+void ShapeMatching::set_beta(double beta) {
+  if (!(beta >= 0.0 && beta <= 1.0)) throw InvalidInput(fmt::format("shape_matching: beta must be in [0, 1], got {}", beta));
+  m_options.beta = beta;
 }
 
 std::vector<std::vector<std::int32_t>> grid_clusters(std::span<const Vec3> positions_mm,

@@ -10,7 +10,6 @@
 #include "ido/core/error.h"
 #include "ido/sim/fem_common.h"
 #include "ido/sim/units.h"
-#include "implicit_cache.h"
 
 namespace ido::sim {
 
@@ -54,15 +53,10 @@ Eigen::SparseMatrix<double> ForceModel::stiffness_matrix(const Particles& partic
 
 // ---- World -------------------------------------------------------------------------------
 
-World::World() : m_cache(std::make_unique<ImplicitCache>()) {}
+World::World() = default;
 World::~World() = default;
 World::World(World&&) noexcept = default;
 World& World::operator=(World&&) noexcept = default;
-
-World::ImplicitCache& World::implicit_cache() {
-  if (!m_cache) m_cache = std::make_unique<ImplicitCache>();
-  return *m_cache;
-}
 
 std::int32_t World::add_tet_body(const geometry::TetMesh& mesh, double density_kg_m3) {
   if (mesh.vertices.empty() || mesh.tets.empty())
@@ -99,12 +93,27 @@ std::int32_t World::add_tet_body(const geometry::TetMesh& mesh, double density_k
 ForceModel& World::add_model(std::unique_ptr<ForceModel> model) {
   if (!model) throw InvalidInput("World::add_model: null model");
   m_models.push_back(std::move(model));
-  implicit_cache().invalidate();
+  ++m_model_revision;
   return *m_models.back();
 }
 
+Integrator& World::scheme(const std::string& name) {
+  const std::uint64_t revision = m_registry.revision(name);
+  auto it = m_schemes.find(name);
+  if (it != m_schemes.end() && it->second.revision == revision && revision != 0) return *it->second.instance;
+  auto instance = m_registry.create(name);   // throws if unknown
+  auto& slot = m_schemes[name];
+  slot.instance = std::move(instance);
+  slot.revision = revision;
+  return *slot.instance;
+}
+
+void World::throw_scheme_type(const std::string& name) {
+  throw InvalidInput("integrator '" + name + "' is not of the type asked for (it was registered as another scheme)");
+}
+
 void World::set_integrator(const std::string& name) {
-  (void)m_registry.get(name);  // throws if unknown
+  (void)scheme(name);   // throws if unknown; makes the instance now (not inside a step)
   m_integrator = name;
 }
 
@@ -148,7 +157,7 @@ void World::step(double dt_s) {
   if (!(dt_s > 0.0) || !std::isfinite(dt_s))
     throw InvalidInput("World::step: dt must be positive and finite, got " + std::to_string(dt_s));
   m_stats = StepStats{};
-  m_registry.get(m_integrator)(*this, dt_s);
+  scheme(m_integrator).step(*this, dt_s);
   auto& x = m_particles.positions();
   auto& v = m_particles.velocities();
   for (const auto& plane : m_external.planes) {

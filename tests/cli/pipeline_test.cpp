@@ -3,6 +3,8 @@
 // the stages agree with each other and with the phantom's ground truth.
 #include <cmath>
 #include <fstream>
+#include <iterator>
+#include <string>
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -113,6 +115,20 @@ TEST(PipelineCli, SpineAortaEndToEnd) {
   const auto& e = report["deformation"]["final_energy"];
   EXPECT_TRUE(std::isfinite(e["total_mj"].get<double>()));
   EXPECT_GT(e["elastic_mj"].get<double>(), 0.0);
+  // The deformation's world is built in memory; the scene file written beside it describes the
+  // same world: `ido simulate` on it gives the same frames and energies, byte for byte.
+  const fs::path rerun = out / "deformation_rerun";
+  const auto s = test::run_tool(fmt::format("-q simulate {} -o {}", (out / "deformation" / "scene.json").string(),
+                                            rerun.string()));
+  ASSERT_EQ(s.exit_code, 0) << s.err;
+  auto bytes = [](const fs::path& p) {
+    std::ifstream file(p, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(file), {});
+  };
+  for (const char* file : {"energy.csv", "simulation.pvd", "frame_0000.vtu", "frame_0005.vtu"}) {
+    EXPECT_FALSE(bytes(out / "deformation" / file).empty()) << file;
+    EXPECT_EQ(bytes(out / "deformation" / file), bytes(rerun / file)) << file;
+  }
 }
 
 TEST(PipelineCli, BadInputExitsTwoAndWritesNoReport) {

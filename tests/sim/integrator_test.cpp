@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 #include <cmath>
+#include <memory>
 #include <thread>
 #include <vector>
 
@@ -7,6 +8,7 @@
 
 #include "ido/core/error.h"
 #include "ido/sim/fem_corotational.h"
+#include "ido/sim/implicit_euler.h"
 #include "ido/sim/units.h"
 #include "sim_test_support.h"
 #include "support/test_support.h"
@@ -326,6 +328,133 @@ TEST(ImplicitSolve, RelaxationOutsideZeroTwoIsRejected) {
     w.implicit_options().sgs_relaxation = omega;
     EXPECT_THROW(w.step(0.01), InvalidInput) << omega;
   }
+}
+
+
+// ---- integrators as objects --------------------------------------------------------------
+
+/// Velocity Verlet that carries the acceleration of the end of one step into the next (the
+/// state a stateless callback cannot keep): one force evaluation per step instead of two. The
+/// carried acceleration is used only when this instance took the previous step (another
+/// scheme may have moved the particles in between); otherwise it is computed afresh.
+class CarriedVerlet final : public sim::Integrator {
+ public:
+  explicit CarriedVerlet(int& instances) { ++instances; }
+  void step(sim::World& world, double dt_s) override {
+    auto& p = world.particles();
+    if (world.step_count() != m_next_step || m_a.size() != p.size()) {
+      world.compute_forces();
+      m_a = world.accelerations();
+      ++fresh_starts;
+    }
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      if (p.fixed(i)) continue;
+      p.velocities()[i] += 0.5 * dt_s * m_a[i];
+      p.positions()[i] += dt_s * p.velocities()[i];
+    }
+    world.compute_forces();
+    m_a = world.accelerations();
+    for (std::size_t i = 0; i < p.size(); ++i)
+      if (!p.fixed(i)) p.velocities()[i] += 0.5 * dt_s * m_a[i];
+    m_next_step = world.step_count() + 1;
+  }
+  [[nodiscard]] std::string_view name() const override { return "carried_verlet"; }
+  int fresh_starts = 0;
+
+ private:
+  std::vector<Vec3> m_a;           // mm/s², at the end of the last step
+  std::int64_t m_next_step = -1;   // World::step_count() of the step that may reuse m_a
+};
+
+// A user scheme with state, registered by factory: its state persists across steps (one force
+// evaluation per step after the first, where velocity Verlet without state needs two), it
+// gives velocity Verlet's trajectory, and switching to RK4 and back keeps the same instance,
+// which notices the gap and recomputes the acceleration once.
+TEST(IntegratorObject, UserSchemeKeepsItsStateAcrossStepsAndSwitches) {
+  // fresh_starts is read while the world lives (the scheme instance is the world's).
+  auto run = [](const std::string& scheme, int* instances, int* fresh_starts, std::vector<int>* evaluations) {
+    auto w = test::harmonic_oscillator();
+    if (instances)
+      w.integrators().add("carried_verlet", sim::IntegratorFactory([instances] {
+                            return std::make_unique<CarriedVerlet>(*instances);
+                          }));
+    for (int phase = 0; phase < 3; ++phase) {
+      w.set_integrator(phase == 1 ? "rk4" : scheme);
+      for (int i = 0; i < 30; ++i) {
+        w.step(0.01);
+        if (evaluations && phase != 1) evaluations->push_back(w.last_step().force_evaluations);
+      }
+    }
+    if (fresh_starts) *fresh_starts = w.scheme_as<CarriedVerlet>("carried_verlet").fresh_starts;
+    return std::pair{w.particles().positions()[1], w.particles().velocities()[1]};
+  };
+  const auto [x_ref, v_ref] = run("velocity_verlet", nullptr, nullptr, nullptr);
+  int instances = 0;
+  int fresh_starts = -1;
+  std::vector<int> evaluations;
+  const auto [x, v] = run("carried_verlet", &instances, &fresh_starts, &evaluations);
+  EXPECT_TRUE(test::near(x.x(), x_ref.x(), 1e-12));
+  EXPECT_TRUE(test::near(v.x(), v_ref.x(), 1e-12));
+  // One instance for the whole run, which started afresh twice: at the start and after RK4.
+  EXPECT_EQ(instances, 1);
+  EXPECT_EQ(fresh_starts, 2);
+  ASSERT_EQ(evaluations.size(), 60u);
+  for (std::size_t k = 0; k < evaluations.size(); ++k)
+    EXPECT_EQ(evaluations[k], k % 30 == 0 ? 2 : 1) << "step " << k;
+}
+
+// Registering a scheme again under the same name gives the world a new instance (fresh state)
+// before its next step with it; a factory that makes nothing is refused.
+TEST(IntegratorObject, ReRegisteringMakesANewInstance) {
+  auto w = test::harmonic_oscillator();
+  int instances = 0;
+  auto factory = sim::IntegratorFactory([&instances] { return std::make_unique<CarriedVerlet>(instances); });
+  w.integrators().add("carried_verlet", factory);
+  w.set_integrator("carried_verlet");
+  w.step(0.01);
+  w.step(0.01);
+  EXPECT_EQ(instances, 1);
+  EXPECT_EQ(w.scheme_as<CarriedVerlet>("carried_verlet").fresh_starts, 1);
+  w.integrators().add("carried_verlet", factory);
+  w.step(0.01);
+  EXPECT_EQ(instances, 2);
+  EXPECT_EQ(w.scheme_as<CarriedVerlet>("carried_verlet").fresh_starts, 1);
+  EXPECT_THROW((void)w.scheme_as<sim::ImplicitEuler>("carried_verlet"), InvalidInput);
+  w.integrators().add("nothing", sim::IntegratorFactory([] { return std::unique_ptr<sim::Integrator>(); }));
+  EXPECT_THROW(w.set_integrator("nothing"), InvalidInput);
+  EXPECT_THROW(w.integrators().add("empty", sim::IntegratorFactory()), InvalidInput);
+  EXPECT_THROW(w.integrators().add("", sim::IntegratorFn([](sim::World&, double) {})), InvalidInput);
+}
+
+// Implicit Euler's options and warm start belong to its instance: World::implicit_options()
+// is that instance's; a fresh instance with the same options solves the next step to the same
+// state (within the CG tolerance) but starts cold, without the history: more CG iterations.
+TEST(IntegratorObject, ImplicitEulerOwnsItsOptionsAndWarmStart) {
+  auto w = beam_world(false);
+  w.set_integrator("implicit_euler");
+  auto& own = w.scheme_as<sim::ImplicitEuler>("implicit_euler");
+  EXPECT_EQ(&w.implicit_options(), &own.options());
+  own.options().cg_tolerance = 1e-8;
+  for (int i = 0; i < 20; ++i) w.step(1e-3);
+
+  // The same world stepped once more by a fresh instance (cold start) and by its own.
+  auto twin = beam_world(false);
+  twin.set_integrator("implicit_euler");
+  twin.implicit_options().cg_tolerance = 1e-8;
+  for (int i = 0; i < 20; ++i) twin.step(1e-3);
+  sim::ImplicitEuler cold({.cg_tolerance = 1e-8});
+  cold.step(twin, 1e-3);
+  const int cold_iterations = twin.step_stats().cg_iterations;
+  w.step(1e-3);
+  // Measured: 98 cold, 71 warm.
+  EXPECT_GT(cold_iterations, w.last_step().cg_iterations + w.last_step().cg_iterations / 5)
+      << "cold " << cold_iterations << ", warm " << w.last_step().cg_iterations;
+  for (std::size_t i = 0; i < w.particles().size(); ++i)
+    EXPECT_LT((w.particles().positions()[i] - twin.particles().positions()[i]).norm(), 1e-8) << i;
+
+  // Replacing "implicit_euler" by another kind of scheme: its options are no longer there.
+  w.integrators().add("implicit_euler", sim::IntegratorFn(sim::integrators::symplectic_euler));
+  EXPECT_THROW((void)w.implicit_options(), InvalidInput);
 }
 
 }  // namespace

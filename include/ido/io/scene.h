@@ -3,15 +3,20 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
+
+#include <nlohmann/json_fwd.hpp>
 
 #include "ido/core/atomic_file.h"
 #include "ido/core/progress.h"
 #include "ido/geometry/tet_mesh.h"
 #include "ido/sim/diagnostics.h"
 #include "ido/sim/fem_common.h"
+#include "ido/sim/runner.h"
 #include "ido/sim/world.h"
 
 namespace ido::io {
@@ -49,40 +54,46 @@ struct Scene {
 [[nodiscard]] Scene parse_scene(std::string_view json_text, const std::string& source_name,
                                 const std::filesystem::path& base_dir);
 
-/// What run_scene() measured.
-struct SceneRunResult {
-  std::vector<double> time_s;             ///< energy samples
-  std::vector<double> kinetic_mj, elastic_mj, gravitational_mj, total_mj;
-  std::vector<double> step_ms;            ///< wall time of each step
-  std::vector<int> cg_iterations;         ///< per step (0 for explicit schemes)
-  sim::EnergyReport final_energy;         ///< at the last step, per model too
-  std::int64_t frames = 0;
-  double wall_time_s = 0.0;
-};
+/// What run_scene() measured (sim::run's result).
+using SceneRunResult = sim::RunResult;
 
 /// How far the bodies' kinetic + elastic energy may exceed what the start state, the loads and
-/// gravity can have given them before run_scene() calls the run diverged (see run_scene).
-inline constexpr double kDivergenceEnergyFactor = 10.0;
+/// gravity can have given them before a run is called diverged (sim::run).
+using sim::kDivergenceEnergyFactor;
 
-/// Runs the scene's steps, writing into @p out_dir (created if missing): frame_NNNN.vtu per
-/// output frame (point data displacement_mm, velocity_mm_s; cell data green_strain,
-/// cauchy_stress_pa, von_mises_pa, body), simulation.pvd, energy.csv and report.json.
+/// The settings sim::run() takes for @p scene: its dt_s and steps, a frame every output_every
+/// steps, the scene's file name as the label, and as the divergence floor the elastic energy
+/// that strains every body by 0.1 % (½ E ε² V summed over the bodies, ε = 10⁻³), so that
+/// rounding noise of a body at rest is not "divergence".
+[[nodiscard]] sim::RunOptions run_options(const Scene& scene);
+
+/// The run's report.json (docs/scene.md): steps, dt_s, the integrator (at the end), particles,
+/// tetrahedra, frames, wall time, ms per step (p50, p90, p99, max), the final energy and the
+/// CG iterations (mean, max, total). run_scene() writes it; a caller adding its own keys (e.g.
+/// pictures) builds it again from the same result instead of reading the file back.
+[[nodiscard]] nlohmann::json scene_report(const Scene& scene, const SceneRunResult& result);
+
+/// Receives each output frame of run_scene() as it is written: the frame's index (0, 1, …)
+/// and its mesh (the bodies' tetrahedra at the current positions with the fields of the
+/// frame file), e.g. to draw it without reading the file back.
+using SceneFrameListener = std::function<void(std::int64_t frame, const geometry::TetMesh& mesh)>;
+
+/// Runs the scene's steps with sim::run() and an observer that writes into @p out_dir
+/// (created if missing): frame_NNNN.vtu per output frame (point data displacement_mm,
+/// velocity_mm_s; cell data green_strain, cauchy_stress_pa, von_mises_pa, body),
+/// simulation.pvd, energy.csv and report.json. @p observers watch the same run after the
+/// writer (sim::RunObserver), and @p on_frame gets every frame's mesh as written.
 /// The outputs are written all or none: they are staged beside their targets and put in place
 /// when the run has ended, by run_scene itself, or by the caller when @p outputs is given (the
 /// caller may then stage more files in the same batch and commit them together).
 ///
-/// A diverging run stops before its bad state reaches a file: after every step the positions
-/// and velocities must be finite, and before every energy sample and frame the bodies' kinetic
-/// + elastic energy must stay within kDivergenceEnergyFactor times an upper bound of what the
-/// run can have received: the start energy, plus Σ (|loads on i| + m_i |g|)·(|x_i − x_i⁰| +
-/// |v_i| dt) for the work of point loads, tractions and gravity, plus a floor of the energy
-/// that strains every body by 0.1 % (so that rounding noise of a body at rest is not
-/// "divergence"). A stable integrator keeps to the energy balance (explicit schemes gain a
-/// little), so only a run whose state grows without bound is stopped.
-/// @throws ido::InvalidInput "<scene>: simulation diverged at step N of M (t = … s): <cause>;
-/// reduce dt_s or use implicit_euler" — nothing of the run is left written (the batch is
-/// discarded and a folder the run created is removed); ido::Cancelled, likewise.
-SceneRunResult run_scene(Scene& scene, const std::filesystem::path& out_dir,
-                         Progress* progress = nullptr, FileBatch* outputs = nullptr);
+/// A diverging run stops before its bad state reaches a file or an observer (sim::run gives
+/// the rule; the floor is run_options()'s).
+/// @throws sim::Diverged (an ido::InvalidInput) "<scene>: simulation diverged at step N of M
+/// (t = … s): <cause>; reduce dt_s or use implicit_euler" — nothing of the run is left written
+/// (the batch is discarded and a folder the run created is removed); ido::Cancelled, likewise.
+SceneRunResult run_scene(Scene& scene, const std::filesystem::path& out_dir, Progress* progress = nullptr,
+                         FileBatch* outputs = nullptr, std::span<sim::RunObserver* const> observers = {},
+                         const SceneFrameListener& on_frame = {});
 
 }  // namespace ido::io

@@ -3,6 +3,7 @@
 
 #include <array>
 #include <cstdint>
+#include <string_view>
 #include <vector>
 
 #include "ido/core/math.h"
@@ -27,6 +28,11 @@ struct Lame {
 /// μ = E / (2(1+ν)), λ = E ν / ((1+ν)(1−2ν)), converted to N/mm².
 /// @throws ido::InvalidInput for E ≤ 0 or ν outside (−1, 0.5).
 [[nodiscard]] Lame lame_parameters(const ElasticMaterial& material);
+
+/// @p material checked parameter by parameter: @throws ido::InvalidInput "<where>:
+/// youngs_modulus_pa must be > 0 and finite, got …" or "<where>: poisson_ratio must be in
+/// (-1, 0.5), got …".
+void check_material(const ElasticMaterial& material, std::string_view where);
 
 /// Von Mises equivalent stress of a symmetric stress tensor (same unit as @p sigma).
 [[nodiscard]] double von_mises(const Mat3& sigma);
@@ -68,6 +74,16 @@ class TetFemModel : public ForceModel {
   [[nodiscard]] std::vector<Mat3> deformation_gradients(const Particles& particles) const;
   [[nodiscard]] const std::vector<Tet>& tets() const noexcept { return m_tets; }
   [[nodiscard]] const Lame& lame() const noexcept { return m_lame; }
+  /// The material the model computes with.
+  [[nodiscard]] const ElasticMaterial& material() const noexcept { return m_material; }
+  /// Changes the material between steps (the rest shape stays). @throws ido::InvalidInput
+  /// naming youngs_modulus_pa (must be > 0 and finite) or poisson_ratio (must be in
+  /// (−1, 0.5)); the model is unchanged then.
+  void set_material(const ElasticMaterial& material);
+  /// Changes Young's modulus E (Pa), keeping ν. @throws as set_material.
+  void set_youngs_modulus(double youngs_modulus_pa);
+  /// Changes Poisson's ratio ν, keeping E. @throws as set_material.
+  void set_poisson_ratio(double poisson_ratio);
   [[nodiscard]] double rest_volume_mm3(std::size_t e) const { return m_volume[e]; }
   /// When on, stiffness_blocks() returns each element's tangent projected onto the positive
   /// semi-definite cone (negative eigenvalues of the 12×12 element matrix clamped to 0, as in
@@ -96,6 +112,7 @@ class TetFemModel : public ForceModel {
   std::vector<Tet> m_tets;
   std::vector<Mat3> m_dm_inv;     ///< D_m⁻¹ per element, 1/mm
   std::vector<double> m_volume;   ///< rest volume per element, mm³
+  ElasticMaterial m_material;
   Lame m_lame;
   bool m_definite = false;
 

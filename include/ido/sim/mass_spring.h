@@ -41,6 +41,12 @@ class MassSpring final : public ForceModel {
   void stiffness_blocks(const Particles& particles, std::span<Mat3> blocks,
                         bool threaded) const override;
   [[nodiscard]] const std::vector<Spring>& springs() const noexcept { return m_springs; }
+  /// Sets every spring's stiffness k (N/mm) between steps. @throws ido::InvalidInput naming
+  /// stiffness_n_per_mm unless ≥ 0 and finite (the model is unchanged then).
+  void set_stiffness(double stiffness_n_per_mm);
+  /// Sets every spring's damping c (N·s/mm) between steps. @throws ido::InvalidInput naming
+  /// damping_n_s_per_mm unless ≥ 0 and finite.
+  void set_damping(double damping_n_s_per_mm);
 
  private:
   std::vector<Spring> m_springs;

@@ -40,6 +40,13 @@ class MlsElasticity final : public ForceModel {
   [[nodiscard]] std::vector<Mat3> displacement_gradients(const Particles& particles) const;
   /// Green strain ½(∇u + ∇uᵀ + ∇uᵀ∇u) per phyxel.
   [[nodiscard]] std::vector<Mat3> green_strains(const Particles& particles) const;
+  [[nodiscard]] const MlsOptions& options() const noexcept { return m_options; }
+  /// Changes the material (E, ν) between steps. @throws ido::InvalidInput naming
+  /// youngs_modulus_pa or poisson_ratio when out of range (check_material); unchanged then.
+  void set_material(const ElasticMaterial& material);
+  /// Changes the volume term's k_v (Pa) between steps. @throws ido::InvalidInput naming
+  /// volume_stiffness_pa unless ≥ 0 and finite.
+  void set_volume_stiffness(double volume_stiffness_pa);
   [[nodiscard]] std::size_t neighbour_count(std::size_t i) const {
     return static_cast<std::size_t>(m_nbr_offset[i + 1] - m_nbr_offset[i]);
   }

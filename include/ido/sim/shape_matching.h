@@ -42,6 +42,13 @@ class ShapeMatching final : public ForceModel {
   [[nodiscard]] const std::vector<std::vector<std::int32_t>>& clusters() const noexcept {
     return m_clusters;
   }
+  [[nodiscard]] const ShapeMatchingOptions& options() const noexcept { return m_options; }
+  /// Sets the stiffness k (1/s²) between steps. @throws ido::InvalidInput naming
+  /// stiffness_per_s2 unless ≥ 0 and finite (the model is unchanged then).
+  void set_stiffness(double stiffness_per_s2);
+  /// Sets the blend β of the linear / quadratic fit with the rotation between steps.
+  /// @throws ido::InvalidInput naming beta unless in [0, 1].
+  void set_beta(double beta);
 
  private:
   struct Cluster;

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <span>
 #include <string>
@@ -11,50 +12,11 @@
 #include "ido/geometry/tet_mesh.h"
 #include "ido/sim/external_forces.h"
 #include "ido/sim/force_model.h"
+#include "ido/sim/implicit_euler.h"
 #include "ido/sim/integrator.h"
 #include "ido/sim/particles.h"
 
 namespace ido::sim {
-
-/// Preconditioner of the implicit Euler conjugate-gradient solve.
-enum class CgPreconditioner {
-  /// Inverse of the system matrix's diagonal (Jacobi).
-  Jacobi,
-  /// Symmetric block Gauss–Seidel / SSOR: M = (D̃ + L) D̃⁻¹ (D̃ + Lᵀ) with D̃ = D / ω, D the
-  /// 3×3 diagonal blocks and L the strictly lower block triangle (Saad, "Iterative Methods
-  /// for Sparse Linear Systems", 2nd ed. 2003, §10.2), ω = ImplicitEulerOptions::
-  /// sgs_relaxation. A quarter to a third of Jacobi's iterations on FEM beams. Applied with
-  /// Eisenstat's trick, so an iteration costs one pass over the matrix, like Jacobi's;
-  /// sequential (deterministic).
-  SymmetricGaussSeidel,
-};
-
-/// Longest warm-start history of the implicit Euler solve (ImplicitEulerOptions).
-inline constexpr int kMaxWarmStartHistory = 16;
-
-/// Settings of the implicit Euler scheme's conjugate-gradient solve.
-struct ImplicitEulerOptions {
-  double cg_tolerance = 1e-6;     ///< stop when ‖r‖ ≤ tolerance · ‖b‖
-  int cg_max_iterations = 500;    ///< cap on CG iterations per step
-  bool warm_start = true;         ///< start CG from the previous step's Δv
-  /// With warm_start: start instead from the best approximation of Δv (in the A-norm, a
-  /// Galerkin projection) in the span of the last warm_start_history steps' Δv — which
-  /// contains the linear extrapolation 2 Δvₙ₋₁ − Δvₙ₋₂. Costs one product with the system
-  /// matrix per stored step; 46 % fewer CG iterations than the extrapolation on the
-  /// benchmark beam with 5 steps.
-  bool warm_start_extrapolation = true;
-  /// Number of previous steps' Δv the projected warm start uses, 1 to
-  /// kMaxWarmStartHistory (implicit_euler throws ido::InvalidInput otherwise). 2 spans the
-  /// linear extrapolation; on the 7350-tet benchmark beam 2 → 60, 3 → 51, 4 → 40, 5 → 36,
-  /// 8 → 30 CG iterations per step.
-  int warm_start_history = 5;
-  CgPreconditioner preconditioner = CgPreconditioner::SymmetricGaussSeidel;
-  /// Relaxation ω of the Gauss–Seidel preconditioner: symmetric SOR (Saad 2003, §10.2),
-  /// D replaced by D / ω; 1 is plain symmetric Gauss–Seidel. 1.3 takes 10–30 % fewer CG
-  /// iterations than 1 on the benchmark beams (1.3–1.4 best there, worse again from 1.5).
-  /// Must be in (0, 2): implicit_euler throws ido::InvalidInput otherwise.
-  double sgs_relaxation = 1.3;
-};
 
 /// What the last step did.
 struct StepStats {
@@ -63,7 +25,8 @@ struct StepStats {
   int force_evaluations = 0;
 };
 
-/// A simulated world: particles, force models, external forces and the current integrator.
+/// A simulated world: particles, force models, external forces and its integrators (one
+/// instance per scheme used, and the one selected).
 /// The caller owns the loop: step() performs exactly one step (the paper's IdoLib design).
 /// Worlds share nothing, so separate worlds may run in separate threads.
 class World {
@@ -99,11 +62,30 @@ class World {
 
   /// The world's integrators; register new ones here.
   [[nodiscard]] IntegratorRegistry& integrators() noexcept { return m_registry; }
-  /// Selects the integrator used by the next step(). @throws ido::InvalidInput if unknown.
+  [[nodiscard]] const IntegratorRegistry& integrators() const noexcept { return m_registry; }
+  /// Selects the integrator used by the next step() (making the world's instance of it if it
+  /// has none yet). @throws ido::InvalidInput if unknown.
   void set_integrator(const std::string& name);
   [[nodiscard]] const std::string& integrator() const noexcept { return m_integrator; }
 
-  [[nodiscard]] ImplicitEulerOptions& implicit_options() noexcept { return m_implicit; }
+  /// The world's instance of scheme @p name, made on first use and kept for the world's life
+  /// (selected or not), so its options and state survive switching away and back. A scheme
+  /// re-registered since is made anew. @throws ido::InvalidInput if unknown.
+  [[nodiscard]] Integrator& scheme(const std::string& name);
+  /// scheme(@p name) as a @p Scheme, to reach its options. @throws ido::InvalidInput if the
+  /// scheme registered under @p name is of another type.
+  template <class Scheme>
+  [[nodiscard]] Scheme& scheme_as(const std::string& name) {
+    auto* s = dynamic_cast<Scheme*>(&scheme(name));
+    if (!s) throw_scheme_type(name);
+    return *s;
+  }
+  /// The options of the world's implicit Euler instance: scheme_as<ImplicitEuler>(
+  /// "implicit_euler").options(). @throws ido::InvalidInput if "implicit_euler" was replaced
+  /// by a scheme of another type.
+  [[nodiscard]] ImplicitEulerOptions& implicit_options() {
+    return scheme_as<ImplicitEuler>("implicit_euler").options();
+  }
 
   /// Runs force assembly with oneTBB (default true). Results do not depend on it.
   void set_threaded(bool threaded) noexcept { m_threaded = threaded; }
@@ -125,19 +107,25 @@ class World {
 
   /// Scheme support: the stats of the step being taken (integrators write into it).
   [[nodiscard]] StepStats& step_stats() noexcept { return m_stats; }
-
-  /// Cached implicit-solver state (sparsity pattern, warm start); opaque.
-  struct ImplicitCache;
-  [[nodiscard]] ImplicitCache& implicit_cache();
+  /// Scheme support: a number that changes whenever a force model is added, so a scheme that
+  /// caches something built from the models (a sparsity pattern) knows to rebuild it.
+  [[nodiscard]] std::uint64_t model_revision() const noexcept { return m_model_revision; }
 
  private:
+  [[noreturn]] static void throw_scheme_type(const std::string& name);
+
   Particles m_particles;
   std::vector<std::unique_ptr<ForceModel>> m_models;
   ExternalForces m_external;
+  /// An instance of a scheme and the registry revision it was made from.
+  struct SchemeSlot {
+    std::unique_ptr<Integrator> instance;
+    std::uint64_t revision = 0;
+  };
   IntegratorRegistry m_registry;
   std::string m_integrator = "symplectic_euler";
-  ImplicitEulerOptions m_implicit;
-  std::unique_ptr<ImplicitCache> m_cache;
+  std::map<std::string, SchemeSlot> m_schemes;
+  std::uint64_t m_model_revision = 0;
   StepStats m_stats;
   double m_time_s = 0.0;
   std::int64_t m_steps = 0;
