@@ -9,76 +9,19 @@
 #include <string>
 #include <thread>
 #include <tuple>
-#include <unordered_map>
-#include <unordered_set>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include "ido/core/error.h"
+#include "point_index.h"
 
 namespace ido::drill {
 namespace {
 
-struct KeyHash {
-  std::size_t operator()(const PointKey& k) const noexcept {
-    // splitmix64 finaliser over the packed (id, weight) pairs.
-    auto mix = [](std::uint64_t x) {
-      x += 0x9E3779B97F4A7C15ULL;
-      x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
-      x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
-      return x ^ (x >> 31);
-    };
-    std::uint64_t h = 0;
-    for (std::size_t i = 0; i < 4; ++i) {
-      h = mix(h ^ ((static_cast<std::uint64_t>(static_cast<std::uint32_t>(k.id[i])) << 32) |
-                   static_cast<std::uint32_t>(k.weight[i])));
-    }
-    return static_cast<std::size_t>(h);
-  }
-};
-
 // Outward face vertex order of a positively oriented tetrahedron: face f is opposite f.
 constexpr int kFaceVerts[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
-
-PointKey midpoint(const PointKey& a, const PointKey& b, bool& exact) {
-  std::array<std::int32_t, 8> id{};
-  std::array<std::int32_t, 8> w{};
-  int n = 0;
-  auto add = [&](std::int32_t i, std::int32_t wt) {
-    for (int k = 0; k < n; ++k)
-      if (id[static_cast<std::size_t>(k)] == i) {
-        w[static_cast<std::size_t>(k)] += wt;
-        return;
-      }
-    id[static_cast<std::size_t>(n)] = i;
-    w[static_cast<std::size_t>(n)] = wt;
-    ++n;
-  };
-  for (std::size_t k = 0; k < 4; ++k) {
-    if (a.id[k] >= 0) add(a.id[k], a.weight[k]);
-    if (b.id[k] >= 0) add(b.id[k], b.weight[k]);
-  }
-  exact = n <= 4;
-  PointKey m;
-  if (!exact) return m;
-  // Sort by id.
-  for (int i = 1; i < n; ++i)
-    for (int j = i; j > 0 && id[static_cast<std::size_t>(j - 1)] > id[static_cast<std::size_t>(j)]; --j) {
-      std::swap(id[static_cast<std::size_t>(j - 1)], id[static_cast<std::size_t>(j)]);
-      std::swap(w[static_cast<std::size_t>(j - 1)], w[static_cast<std::size_t>(j)]);
-    }
-  for (int k = 0; k < n; ++k) {
-    if (w[static_cast<std::size_t>(k)] % 2 != 0) {
-      exact = false;
-      return m;
-    }
-    m.id[static_cast<std::size_t>(k)] = id[static_cast<std::size_t>(k)];
-    m.weight[static_cast<std::size_t>(k)] = w[static_cast<std::size_t>(k)] / 2;
-  }
-  return m;
-}
 
 // Unordered pair code of a child vertex (parent vertex indices a, b).
 int pair_code(int a, int b) { return a < b ? a * 4 + b : b * 4 + a; }
@@ -724,6 +667,10 @@ const std::vector<std::vector<SurfaceFace>>& BoundarySurface::v_lists() const {
 }
 
 std::vector<std::vector<SurfaceFace>> BoundarySurface::take_v_lists() {
+  // The chunk lists are small blocks spread over the heap, so the memory they leave is in
+  // pieces too small for a root's list: each root's list would come on top of it. Every few
+  // MB freed, the free pages go back to the system, so the faces are held about once.
+  detail::FreedPages pages;
   std::vector<std::vector<SurfaceFace>> out(m_chunks.size());
   for (std::size_t r = 0; r < m_chunks.size(); ++r) {
     if (!m_flat_stale[r] && !m_flat[r].empty()) {
@@ -734,8 +681,9 @@ std::vector<std::vector<SurfaceFace>> BoundarySurface::take_v_lists() {
       out[r].reserve(n);
       for (const auto& c : m_chunks[r])
         if (c) out[r].insert(out[r].end(), c->begin(), c->end());
+      for (const auto& c : m_chunks[r]) pages.freed(c && c.use_count() == 1 ? c->capacity() * sizeof(SurfaceFace) : 0U);
     }
-    m_flat[r] = {};
+    std::vector<SurfaceFace>().swap(m_flat[r]);  // (= {} would keep the capacity)
     m_flat_stale[r] = 0;
     std::fill(m_chunks[r].begin(), m_chunks[r].end(), nullptr);
   }
@@ -1080,182 +1028,6 @@ std::uint32_t BoundarySurface::rebuild_range(const TetHierarchy& h, std::uint32_
     if (budget.spent() && c < hi) return c;
   }
   return std::max(requested_hi, hi);
-}
-
-namespace {
-
-// Union-find over triangle corners (3 t + k: corner k of triangle t).
-struct CornerSets {
-  std::vector<std::uint32_t> parent;
-  explicit CornerSets(std::size_t n) : parent(n) {
-    for (std::size_t i = 0; i < n; ++i) parent[i] = static_cast<std::uint32_t>(i);
-  }
-  std::uint32_t find(std::uint32_t i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-  }
-  void join(std::uint32_t a, std::uint32_t b) { parent[find(a)] = find(b); }
-};
-
-// The corner of triangle t at vertex v.
-std::uint32_t corner_at(const geometry::TriangleMesh& m, std::size_t t, std::int32_t v) {
-  const auto& tri = m.triangles[t];
-  const std::size_t k = tri[0] == v ? 0 : (tri[1] == v ? 1 : 2);
-  return static_cast<std::uint32_t>(3 * t + k);
-}
-
-// Makes a closed, consistently oriented surface a 2-manifold without moving anything.
-// Where leaves touch along an edge only, that edge has 2k triangles; sorted by angle about
-// the edge they alternate in direction, and each triangle running against the edge's
-// direction bounds, with the next one counter-clockwise, one wedge of material: those two
-// are paired. Around every vertex the triangles joined through paired (or ordinary)
-// edges form fans; each fan after the first gets its own copy of the vertex. So an edge
-// shared by two wedges becomes one edge per wedge, and a vertex where parts touch at a point
-// becomes one vertex per part; positions (and so the enclosed volume) are unchanged.
-void split_edge_only_contacts(geometry::TriangleMesh& m) {
-  const std::size_t nt = m.triangles.size();
-  struct HalfEdge {
-    std::int32_t lo, hi;   // the edge's vertices, lo < hi
-    std::uint32_t tri;
-    bool forward;          // the triangle runs lo → hi
-    std::int32_t apex;     // the triangle's third vertex
-  };
-  std::vector<HalfEdge> he;
-  he.reserve(3 * nt);
-  for (std::size_t t = 0; t < nt; ++t) {
-    const auto& tr = m.triangles[t];
-    for (std::size_t k = 0; k < 3; ++k) {
-      const std::int32_t a = tr[k], b = tr[(k + 1) % 3];
-      he.push_back({std::min(a, b), std::max(a, b), static_cast<std::uint32_t>(t), a < b, tr[(k + 2) % 3]});
-    }
-  }
-  std::sort(he.begin(), he.end(), [](const HalfEdge& x, const HalfEdge& y) {
-    return std::tie(x.lo, x.hi, x.tri) < std::tie(y.lo, y.hi, y.tri);
-  });
-  CornerSets sets(3 * nt);
-  auto join_pair = [&](const HalfEdge& x, const HalfEdge& y) {
-    sets.join(corner_at(m, x.tri, x.lo), corner_at(m, y.tri, y.lo));
-    sets.join(corner_at(m, x.tri, x.hi), corner_at(m, y.tri, y.hi));
-  };
-  std::vector<std::pair<double, std::size_t>> around;
-  for (std::size_t i = 0; i < he.size();) {
-    std::size_t j = i;
-    while (j < he.size() && he[j].lo == he[i].lo && he[j].hi == he[i].hi) ++j;
-    const std::size_t n = j - i;
-    if (n == 2) {
-      join_pair(he[i], he[i + 1]);
-    } else if (n > 2 && n % 2 == 0) {
-      const Vec3& a = m.vertices[static_cast<std::size_t>(he[i].lo)];
-      const Vec3 d = (m.vertices[static_cast<std::size_t>(he[i].hi)] - a).normalized();
-      const Vec3 e1 = d.unitOrthogonal(), e2 = d.cross(e1);
-      around.clear();
-      for (std::size_t k = i; k < j; ++k) {
-        const Vec3 w = m.vertices[static_cast<std::size_t>(he[k].apex)] - a;
-        around.emplace_back(std::atan2(w.dot(e2), w.dot(e1)), k);
-      }
-      std::sort(around.begin(), around.end());
-      bool alternate = true;
-      for (std::size_t k = 0; k < n; ++k)
-        alternate = alternate && he[around[k].second].forward != he[around[(k + 1) % n].second].forward;
-      if (alternate)
-        for (std::size_t k = 0; k < n; ++k)
-          if (!he[around[k].second].forward) join_pair(he[around[k].second], he[around[(k + 1) % n].second]);
-    }
-    i = j;
-  }
-  // One vertex per fan: the first fan met keeps the vertex, the others get copies.
-  std::vector<std::int32_t> fan_vertex(3 * nt, -1);
-  std::vector<std::uint8_t> taken(m.vertices.size(), 0);
-  for (std::size_t t = 0; t < nt; ++t) {
-    for (std::size_t k = 0; k < 3; ++k) {
-      auto& v = m.triangles[t][k];
-      const std::uint32_t fan = sets.find(static_cast<std::uint32_t>(3 * t + k));
-      if (fan_vertex[fan] < 0) {
-        if (!taken[static_cast<std::size_t>(v)]) {
-          taken[static_cast<std::size_t>(v)] = 1;
-          fan_vertex[fan] = v;
-        } else {
-          fan_vertex[fan] = static_cast<std::int32_t>(m.vertices.size());
-          m.vertices.push_back(m.vertices[static_cast<std::size_t>(v)]);
-        }
-      }
-      v = fan_vertex[fan];
-    }
-  }
-}
-
-}  // namespace
-
-namespace {
-
-// assemble_surface over @p v_lists; release(r) is called once root r's faces are no longer
-// needed (the owning overload frees them there).
-template <class Release>
-geometry::TriangleMesh assemble(std::span<const std::vector<SurfaceFace>> v_lists, std::span<const Vec3> vertices_mm,
-                                Release&& release) {
-  std::unordered_map<PointKey, std::int32_t, KeyHash> index;
-  geometry::TriangleMesh mesh;
-  auto vertex = [&](const PointKey& k) {
-    const auto [it, inserted] = index.try_emplace(k, static_cast<std::int32_t>(mesh.vertices.size()));
-    if (inserted) mesh.vertices.push_back(point_position(k, vertices_mm));
-    return it->second;
-  };
-  for (const auto& list : v_lists)
-    for (const auto& f : list)
-      for (std::size_t e = 0; e < 3; ++e) vertex(f.key(e));
-  auto& root_field = mesh.cell_fields["root"];
-  std::vector<std::int32_t> ring;
-  // Appends the vertices strictly inside edge (a, b) that are surface vertices, in order.
-  auto split = [&](auto&& self, const PointKey& a, const PointKey& b) -> void {
-    bool exact = true;
-    const PointKey m = midpoint(a, b, exact);
-    if (!exact) return;
-    const auto it = index.find(m);
-    if (it == index.end()) return;
-    self(self, a, m);
-    ring.push_back(it->second);
-    self(self, m, b);
-  };
-  for (std::size_t r = 0; r < v_lists.size(); ++r) {
-    for (const auto& face : v_lists[r]) {
-      const std::array<PointKey, 3> f{face.key(0), face.key(1), face.key(2)};
-      ring.clear();
-      for (std::size_t e = 0; e < 3; ++e) {
-        ring.push_back(index.at(f[e]));
-        split(split, f[e], f[(e + 1) % 3]);
-      }
-      if (ring.size() == 3) {
-        mesh.triangles.push_back({ring[0], ring[1], ring[2]});
-        root_field.values.push_back(static_cast<double>(r));
-        continue;
-      }
-      // Fan from the face centroid (strictly inside, so no triangle degenerates).
-      const auto c = static_cast<std::int32_t>(mesh.vertices.size());
-      mesh.vertices.push_back((point_position(f[0], vertices_mm) + point_position(f[1], vertices_mm) +
-                               point_position(f[2], vertices_mm)) / 3.0);
-      for (std::size_t i = 0; i < ring.size(); ++i) {
-        mesh.triangles.push_back({ring[i], ring[(i + 1) % ring.size()], c});
-        root_field.values.push_back(static_cast<double>(r));
-      }
-    }
-    release(r);
-  }
-  index = {};  // the keys' map is not needed by the split: free it first
-  split_edge_only_contacts(mesh);
-  return mesh;
-}
-
-}  // namespace
-
-geometry::TriangleMesh assemble_surface(std::span<const std::vector<SurfaceFace>> v_lists,
-                                        std::span<const Vec3> vertices_mm) {
-  return assemble(v_lists, vertices_mm, [](std::size_t) {});
-}
-
-geometry::TriangleMesh assemble_surface(std::vector<std::vector<SurfaceFace>>&& v_lists,
-                                        std::span<const Vec3> vertices_mm) {
-  auto lists = std::move(v_lists);
-  return assemble(lists, vertices_mm, [&lists](std::size_t r) { lists[r] = {}; });
 }
 
 }  // namespace ido::drill

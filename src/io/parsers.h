@@ -5,6 +5,7 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -35,6 +36,50 @@ void write_obj(std::ostream& out, const geometry::TriangleMesh& mesh);
 void write_ply(std::ostream& out, const geometry::TriangleMesh& mesh, bool ascii, bool big_endian);
 void write_vtp(std::ostream& out, const geometry::TriangleMesh& mesh, bool ascii);
 void write_vtu(std::ostream& out, const geometry::TetMesh& mesh, bool ascii);
+
+/// A named field of a streamed mesh: @p components values per entity.
+struct StreamedField {
+  std::string name;
+  int components = 1;
+};
+
+/// A tetrahedral mesh handed to the writer piece by piece instead of held: its counts, and
+/// generators that call the sink they are given once per value, in file order (so a large mesh
+/// can be written from a structure that only walks it, e.g. a drilling hierarchy).
+struct StreamedTetMesh {
+  std::size_t vertex_count = 0;
+  std::size_t tet_count = 0;
+  std::vector<StreamedField> point_fields;  ///< written in this order
+  std::vector<StreamedField> cell_fields;   ///< written in this order
+  /// Calls its argument with every vertex position (mm), in index order.
+  std::function<void(const std::function<void(const Vec3&)>&)> vertices;
+  /// Calls its argument with every tetrahedron's vertex indices, in order.
+  std::function<void(const std::function<void(const Tet&)>&)> tets;
+  /// point_values(k, put) / cell_values(k, put): puts every value of field k, entity-major.
+  std::function<void(std::size_t, const std::function<void(double)>&)> point_values;
+  std::function<void(std::size_t, const std::function<void(double)>&)> cell_values;
+};
+/// Writes @p mesh as write_vtu(TetMesh) writes the same mesh (byte for byte, fields in the
+/// given order). @throws ido::Error if a generator gives another count than declared.
+void write_vtu(std::ostream& out, const StreamedTetMesh& mesh, bool ascii);
+
+/// A triangle mesh handed to the writer piece by piece, as StreamedTetMesh.
+struct StreamedTriangleMesh {
+  std::size_t vertex_count = 0;
+  std::size_t triangle_count = 0;
+  std::vector<StreamedField> point_fields;  ///< written in this order
+  std::vector<StreamedField> cell_fields;   ///< written in this order
+  /// Calls its argument with every vertex position (mm), in index order.
+  std::function<void(const std::function<void(const Vec3&)>&)> vertices;
+  /// Calls its argument with every triangle's vertex indices, in order.
+  std::function<void(const std::function<void(const Tri&)>&)> triangles;
+  /// point_values(k, put) / cell_values(k, put): puts every value of field k, entity-major.
+  std::function<void(std::size_t, const std::function<void(double)>&)> point_values;
+  std::function<void(std::size_t, const std::function<void(double)>&)> cell_values;
+};
+/// Writes @p mesh as write_vtp(TriangleMesh) writes the same mesh (byte for byte, fields in
+/// the given order). @throws ido::Error if a generator gives another count than declared.
+void write_vtp(std::ostream& out, const StreamedTriangleMesh& mesh, bool ascii);
 void write_gmsh(std::ostream& out, const geometry::TetMesh& mesh, bool version2);
 void write_gmsh_triangles(std::ostream& out, const geometry::TriangleMesh& mesh, bool version2);
 void write_tetgen_node(std::ostream& out, const geometry::TetMesh& mesh);

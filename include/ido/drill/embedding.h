@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "ido/core/math.h"
+#include "ido/drill/leaf_mesh.h"  // full_leaf_mesh
 #include "ido/drill/tet_hierarchy.h"
 #include "ido/geometry/tet_mesh.h"
 #include "ido/image/volume.h"
@@ -28,11 +29,6 @@ struct LeafEmbedding {
 /// World position (mm) of barycentric coordinates @p lambda in root @p r.
 [[nodiscard]] Vec3 embedded_position(const TetHierarchy& hierarchy, std::size_t r,
                                      const std::array<double, 4>& lambda) noexcept;
-
-/// The remaining material as a tetrahedral mesh (mm): one positively oriented tetrahedron
-/// per full leaf, vertices welded by their exact keys, cell fields "depth" and "density"
-/// (relative) and "root".
-[[nodiscard]] geometry::TetMesh full_leaf_mesh(const TetHierarchy& hierarchy);
 
 /// Relative density from Hounsfield units: (HU + 1000) / 1000 (water 1, air 0, dense
 /// cortical bone ≈ 2–3), clamped to [0.05, 4].
