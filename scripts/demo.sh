@@ -80,3 +80,17 @@ echo "Demo results are in $out"
 echo "  summary with pictures:  $out/pipeline/summary.md"
 echo "  whole-run report:       $out/pipeline/report.json"
 echo "  pictures:               $(cd "$out" && ls pipeline/*.png pipeline/deformation/*.png *.png 2>/dev/null | tr '\n' ' ')"
+
+# The one command that opens the results in the window (docs/viewer.md): the CT (Segment,
+# F1), the surfaces and the drilled surface (Scene, F2), the vertebra's tetrahedra first among
+# the meshes, so Mesh (F3) shows them and Drill (F4, p) replays the pedicle path on them, and
+# the deformation scene (Deform, F5). Without a display, prefix it with xvfb-run -a.
+view=(phantom_ct.nii.gz pipeline/bone_tets.vtu pipeline/vessel_surface.stl pipeline/bone_surface.stl
+      pipeline/drilled_surface.stl pipeline/deformation/scene.json)
+view_args=("$ido" view)
+for f in "${view[@]}"; do
+  if [[ -f "$out/$f" ]]; then view_args+=("$out/$f"); fi
+done
+if [[ -f "$out/pedicle_path.csv" ]]; then view_args+=(--drill-replay "$out/pedicle_path.csv"); fi
+echo "  open them in the window:"
+echo "    $(printf '%q ' "${view_args[@]}")"

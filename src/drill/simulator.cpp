@@ -62,6 +62,49 @@ Percentiles percentiles(std::vector<double> v) {
   return p;
 }
 
+void Simulator::record_live_update(double seconds, double removed_mm3) noexcept {
+  // Bin b holds [kLiveMin_s · r^b, kLiveMin_s · r^(b+1)), r = 10^(1/kLiveBinsPerDecade).
+  const double x = seconds > kLiveMin_s ? std::log10(seconds / kLiveMin_s) * kLiveBinsPerDecade : 0.0;
+  const int bin = std::clamp(static_cast<int>(x), 0, kLiveBins - 1);
+  m_live_bins[std::size_t(bin)].fetch_add(1, std::memory_order_relaxed);
+  if (seconds > m_live_max_s.load(std::memory_order_relaxed)) m_live_max_s.store(seconds, std::memory_order_relaxed);
+  m_live_removed_mm3.store(removed_mm3, std::memory_order_relaxed);
+}
+
+LiveStats Simulator::live_stats() const noexcept {
+  std::array<std::uint64_t, kLiveBins> bins{};
+  std::uint64_t n = 0;
+  for (std::size_t b = 0; b < bins.size(); ++b) {
+    bins[b] = m_live_bins[b].load(std::memory_order_relaxed);
+    n += bins[b];
+  }
+  LiveStats out;
+  out.collision_updates = static_cast<std::size_t>(n);
+  out.removed_volume_mm3 = m_live_removed_mm3.load(std::memory_order_relaxed);
+  Percentiles& p = out.update_time_s;
+  p.count = static_cast<std::size_t>(n);
+  p.max = m_live_max_s.load(std::memory_order_relaxed);
+  if (n == 0) return out;
+  // The k-th smallest time (0-based) as the geometric centre of its bin; never above the max.
+  const auto order_statistic = [&](std::uint64_t k) {
+    std::uint64_t below = 0;
+    std::size_t b = 0;
+    for (; b + 1 < bins.size() && below + bins[b] <= k; ++b) below += bins[b];
+    return std::min(p.max, kLiveMin_s * std::pow(10.0, (static_cast<double>(b) + 0.5) / kLiveBinsPerDecade));
+  };
+  // ido::percentile: linear interpolation at q · (n − 1).
+  const auto quantile = [&](double q) {
+    const double pos = q * static_cast<double>(n - 1);
+    const auto k = static_cast<std::uint64_t>(pos);
+    const double lo = order_statistic(k);
+    return k + 1 < n ? lo + (pos - static_cast<double>(k)) * (order_statistic(k + 1) - lo) : lo;
+  };
+  p.p50 = quantile(0.5);
+  p.p99 = quantile(0.99);
+  p.p999 = quantile(0.999);
+  return out;
+}
+
 Simulator::Simulator(TetHierarchy& hierarchy, HapticDevice& device, const SimulatorOptions& options)
     : m_hierarchy(hierarchy),
       m_device(device),
@@ -108,7 +151,7 @@ SessionMemory Simulator::memory_use() const noexcept {
   m.buffers += (st.update_time_s.capacity() + st.haptic_period_s.capacity() + st.force_compute_time_s.capacity() +
                 st.erosion_visits.capacity()) *
                sizeof(double);
-  m.buffers += sizeof(m_pose_buffer) + sizeof(m_contact_buffer) + sizeof(m_snapshots) + m_pending.capacity() * sizeof(ChunkId);
+  m.buffers += sizeof(m_live_bins) + sizeof(m_pose_buffer) + sizeof(m_contact_buffer) + sizeof(m_snapshots) + m_pending.capacity() * sizeof(ChunkId);
   return m;
 }
 
@@ -134,6 +177,9 @@ void Simulator::start() {
   m_path_over.store(false);
   m_timed_out = false;
   m_stats = {};
+  for (auto& b : m_live_bins) b.store(0, std::memory_order_relaxed);
+  m_live_max_s.store(0.0, std::memory_order_relaxed);
+  m_live_removed_mm3.store(0.0, std::memory_order_relaxed);
   m_stats.surface_threads = m_surface.options().threads;
   // The render consumer's copy starts as the surface is now.
   m_render_lists = {};
@@ -346,6 +392,7 @@ void Simulator::collision_loop() {
     const double t1 = now_s();
     m_stats.update_time_s.push_back(t1 - t0);
     ++m_stats.collision_updates;
+    record_live_update(t1 - t0, m_stats.removed_volume_mm3);
     send_pending();
     if (path_over) {
       const bool drained = !m_eroder.has_pending() && !m_surface.has_pending();

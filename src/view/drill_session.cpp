@@ -174,6 +174,10 @@ DrillFigures DrillSession::figures() {
   for (std::size_t i = n > 2000 ? n - 2000 : 1; i < n; ++i)
     periods.push_back(1e3 * (m_device.time_s(i) - m_device.time_s(i - 1)));
   f.haptic_period_ms = drill::percentiles(std::move(periods));
+  const drill::LiveStats live = m_simulator->live_stats();
+  f.update_time_ms = live.update_time_s;
+  for (double* x : {&f.update_time_ms.p50, &f.update_time_ms.p99, &f.update_time_ms.p999, &f.update_time_ms.max}) *x *= 1e3;
+  f.removed_volume_mm3 = live.removed_volume_mm3;
   return f;
 }
 

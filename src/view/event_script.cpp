@@ -63,10 +63,12 @@ EventScript EventScript::parse(const std::string& json_text, const std::string& 
     const auto& w = j["window"];
     if (!w.is_array() || w.size() != 2 || !w[0].is_number_integer() || !w[1].is_number_integer())
       throw bad("/window", "expected [WIDTH, HEIGHT] in pixels");
-    s.window_width_px = w[0].get<int>();
-    s.window_height_px = w[1].get<int>();
-    if (s.window_width_px < 64 || s.window_width_px > 8192 || s.window_height_px < 64 || s.window_height_px > 8192)
+    // Checked at 64 bits: get<int>() would wrap a size like 4294968296 into the range.
+    const auto width = w[0].get<std::int64_t>(), height = w[1].get<std::int64_t>();
+    if (width < 64 || width > 8192 || height < 64 || height > 8192)
       throw bad("/window", "each side must be 64..8192 pixels");
+    s.window_width_px = static_cast<int>(width);
+    s.window_height_px = static_cast<int>(height);
   }
   if (!j.contains("events") || !j["events"].is_array()) throw bad("/events", "expected an array of events");
   std::int64_t last_frame = 0;

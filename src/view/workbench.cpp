@@ -38,6 +38,7 @@
 #include "ido/drill/udp_bridge.h"
 #include "ido/geometry/mesh_checks.h"
 #include "ido/geometry/tet_quality.h"
+#include "ido/geometry/vertex_clustering.h"
 #include "ido/io/mesh_io.h"
 #include "ido/meshing/tetrahedralize.h"
 #include "ido/io/scene.h"
@@ -131,7 +132,32 @@ struct SceneObject {
   std::unique_ptr<gl::MeshBuffer> gpu;
   std::shared_ptr<const geometry::TetMesh> tets = nullptr;  ///< a tetrahedral mesh file's cells (shared with mesh jobs)
   bool cull_back = false;  ///< one closed surface, outward: its back faces are not drawn
+  /// A coarser copy drawn instead while the camera moves (surfaces above kCoarseAbove
+  /// triangles only; null otherwise).
+  std::unique_ptr<gl::MeshBuffer> coarse = nullptr;
 };
+
+/// Level of detail while the camera moves ("LOD while interacting", as ParaView and VTK do):
+/// a surface of more than kCoarseAbove triangles is also uploaded decimated to at most
+/// kCoarseTriangles (geometry::cluster_vertices_to), drawn while a camera drag is held or the
+/// camera changed in that frame; the full surface is drawn once it stops. With llvmpipe on two
+/// cores the cost of a moving view is its triangles (bench/results/view.md).
+constexpr std::size_t kCoarseAbove = 60'000, kCoarseTriangles = 30'000;
+
+/// SCHED_FIFO priority the window's drilling sessions ask for their collision/erosion thread:
+/// below the haptic thread's (drill::SimulatorOptions::haptic_realtime_priority, 80).
+constexpr int kCollisionPriority = 60;
+
+/// Uploads @p o's surface, and its coarse copy when it is large.
+void upload_object(SceneObject& o) {
+  o.gpu = std::make_unique<gl::MeshBuffer>();
+  o.gpu->upload(o.mesh, o.colour);
+  o.coarse.reset();
+  if (o.mesh.triangle_count() > kCoarseAbove) {
+    o.coarse = std::make_unique<gl::MeshBuffer>();
+    o.coarse->upload(geometry::cluster_vertices_to(o.mesh, kCoarseTriangles), o.colour);
+  }
+}
 
 /// True for one closed, oriented surface whose triangles are counter-clockwise seen from
 /// outside: its back faces are hidden behind its front, so they need not be drawn.
@@ -347,6 +373,8 @@ class Workbench {
   double m_window_width = 1, m_level = 0;
   enum class Drag { None, Rotate, Pan, WindowLevel, Clip, Tool, Grab, Roi } m_drag = Drag::None;
   double m_mouse_x = 0, m_mouse_y = 0;
+  bool m_camera_moving = false;   // this frame: large surfaces drawn coarse (draw())
+  std::optional<Mat4> m_last_view;  // the camera's view matrix in the last frame drawn
   bool m_capture_mouse = false, m_capture_keyboard = false;  // ImGui's wish in the last frame
 
   // segmentation
@@ -760,10 +788,7 @@ void Workbench::init_gl() {
     m_marks[std::size_t(a)] = std::make_unique<gl::LineBuffer>();
     if (m_ct) upload_slice(a);
   }
-  for (auto& o : m_objects) {
-    o.gpu = std::make_unique<gl::MeshBuffer>();
-    o.gpu->upload(o.mesh, o.colour);
-  }
+  for (auto& o : m_objects) upload_object(o);
   frame_camera();
   if (m_ct && !m_options.seed_voxels.empty()) {
     for (const Index3& v : m_options.seed_voxels) m_placed.push_back({MarkKind::Seed, v});
@@ -1203,10 +1228,11 @@ void Workbench::accept() {
     return;
   }
   ++m_accepted;
-  SceneObject o{fmt::format("segmentation {}", m_accepted), m_state->result->surface,
-                kObjectColours[std::size_t(m_accepted) % kObjectColours.size()], true,
-                std::make_unique<gl::MeshBuffer>()};
-  o.gpu->upload(o.mesh, o.colour);
+  SceneObject o;
+  o.name = fmt::format("segmentation {}", m_accepted);
+  o.mesh = m_state->result->surface;
+  o.colour = kObjectColours[std::size_t(m_accepted) % kObjectColours.size()];
+  upload_object(o);
   o.cull_back = closed_outward(o.mesh);
   m_objects.push_back(std::move(o));
   m_mesh_source = int(m_objects.size()) - 1;
@@ -1790,8 +1816,12 @@ void Workbench::start_drilling(std::unique_ptr<drill::HapticDevice> source, doub
   const auto material = drill_material();
   if (!material) return;
   try {
-    m_drill = std::make_unique<DrillSession>(
-        *material, drill_cli_options(m_options.burr_radius_mm, m_options.shaft_radius_mm), max_duration_s, std::move(source));
+    drill::SimulatorOptions so = drill_cli_options(m_options.burr_radius_mm, m_options.shaft_radius_mm);
+    // The collision thread at real-time priority below the haptic thread's: the frame loop and
+    // the software rasteriser's threads then cannot delay its updates (bench/results/view.md;
+    // refused without CAP_SYS_NICE, then it runs as in `ido drill`).
+    so.collision_realtime_priority = kCollisionPriority;
+    m_drill = std::make_unique<DrillSession>(*material, so, max_duration_s, std::move(source));
   } catch (const std::exception& e) {
     say(std::string("cannot drill: ") + e.what());
     return;
@@ -1849,9 +1879,9 @@ void Workbench::drill_ended() {
   const drill::Percentiles update = ms(st.update_time_s), period = ms(st.haptic_period_s);
   m_drill_summary = fmt::format(
       "removed {:.2f} mm3 in {} ticks\nupdate p50 {:.2f} / p99 {:.2f} ms\nhaptic period p50 {:.3f} / p99 {:.3f} / "
-      "p99.9 {:.3f} ms\nmissed deadlines: {}",
+      "p99.9 {:.3f} ms\nmissed deadlines: {}\nreal-time priority: haptic {}, collision {}",
       st.removed_volume_mm3, st.haptic_ticks, update.p50, update.p99, period.p50, period.p99, period.p999,
-      st.missed_deadlines);
+      st.missed_deadlines, st.haptic_realtime ? "yes" : "refused", st.collision_realtime ? "yes" : "refused");
   say(fmt::format("drilling ended: removed {:.3f} mm3", st.removed_volume_mm3));
   try {
     if (!m_options.drill_path.empty()) m_drill->write_path_csv(m_options.drill_path);
@@ -1866,6 +1896,8 @@ void Workbench::drill_ended() {
                                 {"removed_volume_mm3", st.removed_volume_mm3},
                                 {"haptic_ticks", st.haptic_ticks},
                                 {"missed_deadlines", st.missed_deadlines},
+                                {"haptic_realtime", st.haptic_realtime},
+                                {"collision_realtime", st.collision_realtime},
                                 {"collision_updates", st.collision_updates},
                                 {"peak_force_n", st.peak_force_n},
                                 {"update_time_ms", json_of(update)},
@@ -1917,9 +1949,12 @@ void Workbench::drill_panel() {
               f.contact ? "CONTACT" : "free");
   ImGui::Text("haptic period p50 %.3f  p99 %.3f  p99.9 %.3f ms", f.haptic_period_ms.p50, f.haptic_period_ms.p99,
               f.haptic_period_ms.p999);
+  ImGui::Text("collision update p50 %.3f  p99 %.3f ms (%zu updates)", f.update_time_ms.p50, f.update_time_ms.p99,
+              f.update_time_ms.count);
+  ImGui::Text("removed %.2f mm3 so far", f.removed_volume_mm3);
   if (m_drill_surface)
-    ImGui::Text("removed %.2f mm3 (surface at %.2f s)", m_drill->initial_volume_mm3() - m_drill_surface->volume_mm3,
-                m_drill_surface->t_s);
+    ImGui::Text("surface at %.2f s: %.2f mm3 less inside", m_drill_surface->t_s,
+                m_drill->initial_volume_mm3() - m_drill_surface->volume_mm3);
   if (m_drill_reported) ImGui::TextWrapped("%s", m_drill_summary.c_str());
 }
 
@@ -2267,7 +2302,7 @@ std::vector<double> Workbench::view_key(int w_px, int h_px) const {
   const Mat4 view = cam.view_matrix(), projection = cam.projection_matrix(m_rect_3d.width / std::max(1.0, m_rect_3d.height));
   std::vector<double> key = {double(static_cast<int>(m_workspace)), double(w_px), double(h_px),
                              double(gl::upload_count()), m_window_width, m_level, double(m_mesh_source),
-                             m_mesh ? 1.0 : 0.0, double(m_objects.size())};
+                             m_mesh ? 1.0 : 0.0, double(m_objects.size()), m_camera_moving ? 1.0 : 0.0};
   key.insert(key.end(), view.data(), view.data() + 16);
   key.insert(key.end(), projection.data(), projection.data() + 16);
   for (const auto& o : m_objects) key.push_back(o.visible ? 1.0 : 0.0);
@@ -2363,7 +2398,8 @@ void Workbench::render_3d(const PixelRect& r) {
     return;
   }
   for (const auto& o : m_objects)
-    if (o.visible) m_painter->draw_mesh(*o.gpu, mvp, v, Eigen::Vector4f(0, 0, 0, 1), o.cull_back);
+    if (o.visible)
+      m_painter->draw_mesh(m_camera_moving && o.coarse ? *o.coarse : *o.gpu, mvp, v, Eigen::Vector4f(0, 0, 0, 1), o.cull_back);
   if (m_workspace == Workspace::Segment && m_ct) {
     m_painter->draw_mesh(*m_balloon_gpu, mvp, v);
     for (int a = 0; a < 3; ++a) m_painter->draw_slice(*m_slice_3d[std::size_t(a)], mvp, m_window_width, m_level);
@@ -2382,6 +2418,11 @@ void Workbench::draw(int fb_width, int fb_height) {
   glScissor(0, 0, fb_width, fb_height);
   glClearColor(0.08f, 0.08f, 0.09f, 1);
   glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  // The camera moves while a turn or move drag is held, or when it changed since the last
+  // frame (the wheel): large surfaces are then drawn coarse (kCoarseAbove).
+  const Mat4 view = m_camera.camera().view_matrix();
+  m_camera_moving = m_drag == Drag::Rotate || m_drag == Drag::Pan || (m_last_view && *m_last_view != view);
+  m_last_view = view;
   if (m_workspace == Workspace::Drill || m_workspace == Workspace::Deform)  // they change every frame
     draw_3d(m_rect_3d, scale, fb_height);
   else

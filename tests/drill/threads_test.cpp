@@ -7,6 +7,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -143,6 +144,58 @@ TEST(Simulator, ScriptedSessionDrillsAndRenderCopyMatches) {
     const double swept = 4.0 / 3.0 * kPi * 8 + kPi * 4 * (2.0 + 2.06 + 3.5);
     EXPECT_LE(st.removed_volume_mm3, swept);
   }
+}
+
+// live_stats() is read from another thread while the session runs (TSan checks the
+// hand-off) and only grows; once the session has stopped its figures are stats()': counts,
+// maximum and removed volume exactly, the percentiles within half a bin (the bins' ratio^½).
+TEST(Simulator, LiveUpdatePercentilesAgreeWithTheFinalStats) {
+  TetHierarchy h(make_block({12, 12, 12}, 3.0));
+  auto device = plunge(0.4);
+  SimulatorOptions o;
+  o.tool.burr_radius_mm = 2.0;
+  o.erosion = {.force_threshold_n = 0.05, .removal_rate_mm3_per_s = 0.0, .max_depth = 4};
+  o.haptic_realtime_priority = 0;
+  Simulator sim(h, device, o);
+  EXPECT_EQ(sim.live_stats().collision_updates, 0U);
+  std::atomic<bool> done{false};
+  std::thread runner([&] {
+    sim.run(10.0);
+    done.store(true);
+  });
+  LiveStats last;
+  std::size_t reads = 0;
+  while (!done.load()) {
+    const LiveStats l = sim.live_stats();
+    EXPECT_GE(l.collision_updates, last.collision_updates);
+    EXPECT_GE(l.removed_volume_mm3, last.removed_volume_mm3);
+    EXPECT_GE(l.update_time_s.max, last.update_time_s.max);
+    EXPECT_EQ(l.update_time_s.count, l.collision_updates);
+    if (l.collision_updates > 0) {
+      EXPECT_LE(l.update_time_s.p50, l.update_time_s.p99);
+      EXPECT_LE(l.update_time_s.p99, l.update_time_s.max);
+    }
+    last = l;
+    ++reads;
+    std::this_thread::sleep_for(std::chrono::microseconds(500));
+  }
+  runner.join();
+  EXPECT_GT(reads, 10U);
+  const SessionStats& st = sim.stats();
+  const LiveStats live = sim.live_stats();
+  ASSERT_GT(st.collision_updates, 10U);
+  EXPECT_EQ(live.collision_updates, st.collision_updates);
+  EXPECT_EQ(live.update_time_s.count, st.update_time_s.size());
+  EXPECT_EQ(live.removed_volume_mm3, st.removed_volume_mm3);
+  const Percentiles exact = percentiles(st.update_time_s);
+  EXPECT_EQ(live.update_time_s.max, exact.max);
+  const double half_bin = std::sqrt(Simulator::kLiveBinRatio) * (1.0 + 1e-12);
+  for (const auto& [got, want] : {std::pair{live.update_time_s.p50, exact.p50}, std::pair{live.update_time_s.p99, exact.p99},
+                                  std::pair{live.update_time_s.p999, exact.p999}}) {
+    EXPECT_LE(got, want * half_bin);
+    EXPECT_GE(got, want / half_bin);
+  }
+  EXPECT_NEAR(std::pow(Simulator::kLiveBinRatio, 24), 10.0, 1e-12);
 }
 
 // A plunge that ends with the burr resting in contact, at fine leaves (each burr position

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <functional>
@@ -76,6 +77,20 @@ struct Percentiles {
 };
 /// Percentiles of @p values (ido::percentile's definition); all zero for an empty series.
 [[nodiscard]] Percentiles percentiles(std::vector<double> values);
+
+/// What a running session has measured so far, readable from any thread while it runs
+/// (Simulator::live_stats).
+struct LiveStats {
+  std::size_t collision_updates = 0;  ///< collision/erosion updates so far
+  /// The updates' times (s) so far. p50, p99 and p999 are ido::percentile's (linear
+  /// interpolation between order statistics) over the updates' log-spaced time bins (24 a
+  /// decade from 100 ns to 100 s), each order statistic taken as its bin's geometric centre: a
+  /// figure lies within a factor Simulator::kLiveBinRatio^½ (4.9 %) of what stats() gives for the
+  /// same updates once the session has stopped (times outside the bins count as the end bins).
+  /// max and count are exact.
+  Percentiles update_time_s;
+  double removed_volume_mm3 = 0.0;  ///< material removed so far
+};
 
 /// Where a session's memory goes (bytes allocated, capacities; see Simulator::memory_use).
 struct SessionMemory {
@@ -157,6 +172,12 @@ class Simulator {
 
   /// Measurements (call after stop()).
   [[nodiscard]] const SessionStats& stats() const noexcept { return m_stats; }
+  /// The session's figures so far, from any thread, while it runs or after (since the last
+  /// start()): the collision thread counts each update's time in a log-spaced bin with an
+  /// atomic counter (no lock, allocation or wait on its path), and this reads the bins.
+  [[nodiscard]] LiveStats live_stats() const noexcept;
+  /// Ratio of the upper to the lower edge of a live_stats() time bin (10^(1/24)).
+  static constexpr double kLiveBinRatio = 1.1006941712522096;
   /// The authoritative boundary surface (call after stop()).
   [[nodiscard]] const BoundarySurface& surface() const noexcept { return m_surface; }
   /// The render consumer's copy of the v_lists (call after stop(); made from its chunk
@@ -226,6 +247,17 @@ class Simulator {
 
   SessionStats m_stats;
   std::vector<double> m_tick_period, m_tick_compute, m_tick_force;
+
+  // live_stats(): update times in log-spaced bins (kLiveBinsPerDecade a decade from
+  // kLiveMin_s), written by the collision thread only (relaxed atomics: each counter is read
+  // whole; the reader sums what it read, so its ranks are consistent), reset by start().
+  static constexpr int kLiveBinsPerDecade = 24;
+  static constexpr int kLiveBins = 9 * kLiveBinsPerDecade;  // 100 ns .. 100 s
+  static constexpr double kLiveMin_s = 1e-7;
+  void record_live_update(double seconds, double removed_mm3) noexcept;
+  std::array<std::atomic<std::uint64_t>, kLiveBins> m_live_bins{};
+  std::atomic<double> m_live_max_s{0.0};
+  std::atomic<double> m_live_removed_mm3{0.0};
 };
 
 }  // namespace ido::drill

@@ -86,6 +86,10 @@ struct DrillFigures {
   double session_s = 0.0;        ///< session time of the newest tick (s)
   std::size_t ticks = 0;         ///< haptic ticks so far
   drill::Percentiles haptic_period_ms;  ///< over the last 2000 ticks (ms)
+  /// The collision thread's update times so far this session (ms; drill::Simulator::live_stats:
+  /// within 5 % of the final figures).
+  drill::Percentiles update_time_ms;
+  double removed_volume_mm3 = 0.0;  ///< removed so far, as the collision thread counts it
 };
 
 /// A drilling session driven from the window: drill::Simulator's three threads as `ido drill`
