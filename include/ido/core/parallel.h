@@ -9,7 +9,7 @@
 namespace ido {
 
 /// Calls body(begin, end) over disjoint sub-ranges covering [0, n), in parallel with oneTBB
-/// when @p threaded is true, else serially in one call. @p grain is the smallest chunk.
+/// when @p threaded is true, else serially in one call. Halved while longer than @p grain.
 template <class Body>
 void parallel_for_ranges(std::size_t n, Body&& body, bool threaded = true,
                          std::size_t grain = 256) {

@@ -29,7 +29,7 @@ struct VolumeStatistics {
   double max = 0.0;
   double mean = 0.0;
   double stddev = 0.0;  ///< population standard deviation
-  /// (percent, value) pairs for 1, 5, 25, 50, 75, 95 and 99 % (nearest-rank definition).
+  /// (percent, value) pairs for 1, 5, 25, 50, 75, 95 and 99 % (ido::percentile's definition).
   std::vector<std::pair<double, double>> percentiles;
 };
 
