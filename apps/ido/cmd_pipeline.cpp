@@ -404,15 +404,10 @@ void run(const Options& o, const GlobalOptions& g) {
   report["tetmesh"] = {{"organ", target.name}, {"quality", io::to_json(geometry::check_tet_mesh(tets))}};
   {
     viz::Renderer pic(900, 700);
-    auto lo = tets.vertices.front(), hi = lo;
-    for (const auto& v : tets.vertices) {
-      lo = lo.cwiseMin(v);
-      hi = hi.cwiseMax(v);
-    }
     viz::TetClipOptions clip_options;
     clip_options.uniform_colour = Vec3(0.85, 0.8, 0.65);
     clip_options.edges = true;
-    pic.add_tet_mesh_clipped(tets, {.point = 0.5 * (lo + hi), .normal = Vec3(1, 0, 0)}, "", clip_options);
+    pic.add_tet_mesh_clipped(tets, {.point = geometry::Aabb::of(tets.vertices).centre(), .normal = Vec3(1, 0, 0)}, "", clip_options);
     pic.set_camera(pic.fit_camera(90, 10));
     pic.write_png(dir / "tetmesh_clip.png");
     pictures.push_back(json{{"file", "tetmesh_clip.png"}, {"what", "tetrahedral mesh, cut in half"}});

@@ -20,6 +20,7 @@
 #include "command.h"
 #include "energy_plot.h"
 #include "ido/core/error.h"
+#include "ido/geometry/aabb.h"
 #include "ido/io/scene.h"
 #include "ido/viz/renderer.h"
 #include "snapshots.h"
@@ -105,19 +106,17 @@ nlohmann::json write_snapshots(const Options& o, SnapshotFrames& frames, Progres
   SnapshotWriter writer(o.snapshots, {.width_px = w, .height_px = h, .azimuth_deg = 20.0, .elevation_deg = 15.0});
   const auto picked = frames.finish();
   // Pass 1: bounds and value range over the whole run.
-  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  geometry::Aabb box;
   double vmin = std::numeric_limits<double>::infinity(), vmax = -vmin;
   for (const auto& f : picked) {
-    for (const Vec3& p : f.vertices) {
-      lo = lo.cwiseMin(p);
-      hi = hi.cwiseMax(p);
-    }
+    for (const Vec3& p : f.vertices) box.extend(p);
     for (const double v : f.values) {
       vmin = std::min(vmin, v);
       vmax = std::max(vmax, v);
     }
   }
-  if (!(hi.array() >= lo.array()).all()) throw Error("snapshots: the scene's frames have no vertices");
+  const Vec3 &lo = box.min, &hi = box.max;
+  if (box.empty()) throw Error("snapshots: the scene's frames have no vertices");
   if (!(vmax > vmin)) vmax = vmin + std::max(1e-12, std::abs(vmin) * 1e-6);
   writer.frame(lo, hi);
   // Pass 2: the pictures.

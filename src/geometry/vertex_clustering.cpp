@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "ido/core/error.h"
+#include "ido/geometry/aabb.h"
 
 namespace ido::geometry {
 
@@ -24,11 +25,8 @@ TriangleMesh cluster_vertices(const TriangleMesh& mesh, double cell_mm) {
       if (v < 0 || static_cast<std::size_t>(v) >= n) throw InvalidInput("vertex clustering: a triangle names a vertex out of range");
 
   // The grid: cubes of cell_mm from the bounding box's minimum; a cube's key is its linear index.
-  Vec3 lo = mesh.vertices[0], hi = lo;
-  for (const Vec3& v : mesh.vertices) {
-    lo = lo.cwiseMin(v);
-    hi = hi.cwiseMax(v);
-  }
+  const Aabb box = Aabb::of(mesh.vertices);
+  const Vec3 &lo = box.min, &hi = box.max;
   std::array<std::uint64_t, 3> dims{};
   double cells = 1.0;
   for (int a = 0; a < 3; ++a) {

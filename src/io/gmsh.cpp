@@ -7,6 +7,8 @@
 
 #include <fmt/format.h>
 
+#include "ido/geometry/aabb.h"
+
 #include "parsers.h"
 #include "text_parser.h"
 
@@ -258,14 +260,8 @@ void write_msh(std::ostream& out, const std::vector<Vec3>& vertices, const std::
     out << "$EndElements\n";
     return;
   }
-  Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();
-  if (nv) {
-    lo = hi = vertices[0];
-    for (const auto& p : vertices) {
-      lo = lo.cwiseMin(p);
-      hi = hi.cwiseMax(p);
-    }
-  }
+  const geometry::Aabb box = nv ? geometry::Aabb::of(vertices) : geometry::Aabb{Vec3::Zero(), Vec3::Zero()};
+  const Vec3 &lo = box.min, &hi = box.max;
   out << "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Entities\n";
   out << (dim == 2 ? "0 0 1 0\n" : "0 0 0 1\n");
   out << fmt::format("1 {:.17g} {:.17g} {:.17g} {:.17g} {:.17g} {:.17g} 0 0\n", lo.x(), lo.y(), lo.z(), hi.x(), hi.y(), hi.z());

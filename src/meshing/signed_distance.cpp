@@ -12,6 +12,7 @@
 
 #include "ido/core/error.h"
 #include "ido/core/parallel.h"
+#include "ido/geometry/aabb.h"
 #include "ido/geometry/mesh_topology.h"
 #include "ido/geometry/predicates.h"
 #include "ido/geometry/winding_number.h"
@@ -58,11 +59,8 @@ image::Volume<float> distance_grid(const geometry::TriangleMesh& surface, double
   if (surface.vertices.empty()) throw InvalidInput("distance grid: the mesh has no vertices");
   if (!(spacing_mm > 0) || !std::isfinite(spacing_mm) || margin_cells < 0)
     throw InvalidInput("distance grid: the spacing must be positive and the margin not negative");
-  Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
-  for (const Vec3& v : surface.vertices) {
-    lo = lo.cwiseMin(v);
-    hi = hi.cwiseMax(v);
-  }
+  const geometry::Aabb box = geometry::Aabb::of(surface.vertices);
+  const Vec3 &lo = box.min, &hi = box.max;
   Index3 size;
   for (int a = 0; a < 3; ++a)
     size[a] = static_cast<std::int64_t>(std::ceil((hi[a] - lo[a]) / spacing_mm)) + 2 * margin_cells + 1;

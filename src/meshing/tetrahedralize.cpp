@@ -13,6 +13,7 @@
 
 #include "ido/core/error.h"
 #include "ido/core/parallel.h"
+#include "ido/geometry/aabb.h"
 #include "ido/meshing/signed_distance.h"
 #include "stuffing_internal.h"
 
@@ -379,7 +380,7 @@ geometry::TetMesh tetrahedralize_surface(const geometry::TriangleMesh& surface,
   if (!std::isfinite(options.edge_mm) || options.edge_mm < 0)
     throw InvalidInput("tetrahedralize_surface: edge_mm must be a finite length >= 0 (mm)");
   const auto nv = surface.vertices.size();
-  Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
+  geometry::Aabb box;  // of the corners the triangles use
   double edge_sum = 0;
   for (const Tri& t : surface.triangles) {
     for (int k = 0; k < 3; ++k) {
@@ -387,10 +388,10 @@ geometry::TetMesh tetrahedralize_surface(const geometry::TriangleMesh& surface,
       if (a < 0 || std::size_t(a) >= nv || b < 0 || std::size_t(b) >= nv)
         throw InvalidInput("tetrahedralize_surface: triangle index out of range");
       edge_sum += (surface.vertices[std::size_t(a)] - surface.vertices[std::size_t(b)]).norm();
-      lo = lo.cwiseMin(surface.vertices[std::size_t(a)]);
-      hi = hi.cwiseMax(surface.vertices[std::size_t(a)]);
+      box.extend(surface.vertices[std::size_t(a)]);
     }
   }
+  const Vec3 &lo = box.min, &hi = box.max;
   if (!lo.allFinite() || !hi.allFinite())
     throw InvalidInput("tetrahedralize_surface: the surface has non-finite coordinates");
   const double h = options.edge_mm > 0 ? options.edge_mm

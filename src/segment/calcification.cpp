@@ -16,6 +16,7 @@
 #include "ido/core/error.h"
 #include "ido/core/parallel.h"
 #include "ido/core/statistics.h"
+#include "ido/geometry/aabb.h"
 #include "ido/geometry/mesh_checks.h"
 #include "ido/geometry/mesh_topology.h"
 #include "ido/geometry/self_intersection.h"
@@ -112,11 +113,7 @@ CalcificationResult add_calcification(const geometry::TriangleMesh &lumen, const
   const image::Volume<std::uint8_t> plaque = grow_plaque(lumen_mask, ct, o);
   CalcificationResult out;
   std::vector<double> plaque_values;
-  Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
-  for (const Vec3 &v : lumen.vertices) {
-    lo = lo.cwiseMin(v);
-    hi = hi.cwiseMax(v);
-  }
+  geometry::Aabb box = geometry::Aabb::of(lumen.vertices);
   const Index3 n = ct.size();
   for (std::int64_t k = 0; k < n[2]; ++k)
     for (std::int64_t j = 0; j < n[1]; ++j)
@@ -124,8 +121,7 @@ CalcificationResult add_calcification(const geometry::TriangleMesh &lumen, const
         if (!plaque(i, j, k)) continue;
         plaque_values.push_back(ct(i, j, k));
         const Vec3 p = ct.index_to_world(Vec3(double(i), double(j), double(k)));
-        lo = lo.cwiseMin(p);
-        hi = hi.cwiseMax(p);
+        box.extend(p);
       }
   out.plaque_voxels = static_cast<std::int64_t>(plaque_values.size());
   out.plaque_volume_mm3 = double(out.plaque_voxels) * ct.spacing().prod();
@@ -160,8 +156,8 @@ CalcificationResult add_calcification(const geometry::TriangleMesh &lumen, const
       }
 
   const double margin = 3.0 * ct.spacing().maxCoeff();
-  lo -= Vec3::Constant(margin);
-  hi += Vec3::Constant(margin);
+  box = box.inflated(margin);
+  const Vec3 &lo = box.min, &hi = box.max;
   Index3 size;
   for (int a = 0; a < 3; ++a) size[a] = static_cast<std::int64_t>(std::ceil((hi[a] - lo[a]) / h)) + 1;
   meshing::SignedDistanceOptions sd;

@@ -3,6 +3,7 @@
 // panel on the left and the views on the right. Input from GLFW and from event scripts goes
 // through one queue (so a recorded session replays through the same path), and the frame loop
 // only reads what the worker threads hand over (SegmentSession), never waits for them.
+#include "ido/geometry/aabb.h"
 #include "ido/view/workbench.h"
 
 #include "gl_draw.h"  // first: defines GL_GLEXT_PROTOTYPES before any GL header
@@ -342,7 +343,7 @@ class Workbench {
   std::shared_ptr<const image::Volume<float>> m_ct;  // shared with the SegmentSession's workers
   std::string m_ct_name;
   std::vector<SceneObject> m_objects;
-  std::array<Vec3, 2> m_bounds = {Vec3::Zero(), Vec3::Ones()};
+  geometry::Aabb m_bounds{Vec3::Zero(), Vec3::Ones()};
 
   // window and GL
   GLFWwindow* m_window = nullptr;
@@ -600,25 +601,20 @@ void Workbench::load_files() {
       throw InvalidInput(fmt::format("{}: not a volume, surface, tetrahedral mesh or scene (.json) file", f.string()));
     }
   }
-  Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
+  geometry::Aabb box;
   if (m_ct) {
     for (int c = 0; c < 8; ++c) {
       const Vec3 idx((c & 1) ? double(m_ct->size(0)) - 0.5 : -0.5, (c & 2) ? double(m_ct->size(1)) - 0.5 : -0.5,
                      (c & 4) ? double(m_ct->size(2)) - 0.5 : -0.5);
-      const Vec3 w = m_ct->index_to_world(idx);
-      lo = lo.cwiseMin(w);
-      hi = hi.cwiseMax(w);
+      box.extend(m_ct->index_to_world(idx));
     }
   }
   for (const auto& o : m_objects)
-    for (const Vec3& p : o.mesh.vertices) {
-      lo = lo.cwiseMin(p);
-      hi = hi.cwiseMax(p);
-    }
-  if (lo.allFinite() && hi.allFinite()) m_bounds = {lo, hi};
+    for (const Vec3& p : o.mesh.vertices) box.extend(p);
+  if (box.min.allFinite() && box.max.allFinite()) m_bounds = box;
   for (auto& o : m_objects) o.cull_back = closed_outward(o.mesh);
   if (!m_objects.empty()) m_mesh_source = 0;
-  m_clip_offset_mm = 0.5 * (m_bounds[0][m_clip_axis] + m_bounds[1][m_clip_axis]);
+  m_clip_offset_mm = 0.5 * (m_bounds.min[m_clip_axis] + m_bounds.max[m_clip_axis]);
   if (m_ct) {
     m_workspace = Workspace::Segment;
     for (int a = 0; a < 3; ++a) m_slice[std::size_t(a)] = m_ct->size(a) / 2;
@@ -776,8 +772,8 @@ void Workbench::init_gl() {
   m_grab_lines = std::make_unique<gl::LineBuffer>();
   m_tool_gpu = std::make_unique<gl::MeshBuffer>();
   m_force_lines = std::make_unique<gl::LineBuffer>();
-  m_tool_mm = Vec3(0.5 * (m_bounds[0].x() + m_bounds[1].x()), 0.5 * (m_bounds[0].y() + m_bounds[1].y()),
-                   m_bounds[1].z() + 2.0 * m_options.burr_radius_mm);
+  m_tool_mm = Vec3(0.5 * (m_bounds.min.x() + m_bounds.max.x()), 0.5 * (m_bounds.min.y() + m_bounds.max.y()),
+                   m_bounds.max.z() + 2.0 * m_options.burr_radius_mm);
   move_tool(m_tool_mm);
   m_section_gpu = std::make_unique<gl::MeshBuffer>();
   m_section_lines = std::make_unique<gl::LineBuffer>();
@@ -802,7 +798,7 @@ void Workbench::init_gl() {
   }
 }
 
-void Workbench::frame_camera() { m_camera.frame(m_bounds[0], m_bounds[1]); }
+void Workbench::frame_camera() { m_camera.frame(m_bounds.min, m_bounds.max); }
 
 // ---- input ---------------------------------------------------------------------------------
 
@@ -944,7 +940,7 @@ void Workbench::view_mouse_move(const InputEvent& e) {
     case Drag::Clip: {
       const double mm_per_px = 2.0 * m_camera.distance_mm() * std::tan(15.0 * kPi / 180.0) / std::max(1.0, m_rect_3d.height);
       m_clip_offset_mm -= dy * mm_per_px;
-      m_clip_offset_mm = std::clamp(m_clip_offset_mm, m_bounds[0][m_clip_axis], m_bounds[1][m_clip_axis]);
+      m_clip_offset_mm = std::clamp(m_clip_offset_mm, m_bounds.min[m_clip_axis], m_bounds.max[m_clip_axis]);
       m_section_dirty = true;
       break;
     }
@@ -1092,7 +1088,7 @@ void Workbench::shortcut(const InputEvent& e) {
     if (k == "c" && !e.ctrl) m_clip_drag = !m_clip_drag;
     if ((k == "x" || k == "y" || k == "z") && !e.ctrl) {
       m_clip_axis = k[0] - 'x';
-      m_clip_offset_mm = 0.5 * (m_bounds[0][m_clip_axis] + m_bounds[1][m_clip_axis]);
+      m_clip_offset_mm = 0.5 * (m_bounds.min[m_clip_axis] + m_bounds.max[m_clip_axis]);
       m_section_dirty = true;
     }
     if (k == "f" && !e.ctrl) {
@@ -1736,11 +1732,11 @@ void Workbench::mesh_panel() {
   if (ImGui::Checkbox("flip (f)", &m_clip_flip)) m_section_dirty = true;
   if (axis != m_clip_axis) {
     m_clip_axis = axis;
-    m_clip_offset_mm = 0.5 * (m_bounds[0][axis] + m_bounds[1][axis]);
+    m_clip_offset_mm = 0.5 * (m_bounds.min[axis] + m_bounds.max[axis]);
     m_section_dirty = true;
   }
   float offset = float(m_clip_offset_mm);
-  if (ImGui::SliderFloat("at (mm)", &offset, float(m_bounds[0][m_clip_axis]), float(m_bounds[1][m_clip_axis]))) {
+  if (ImGui::SliderFloat("at (mm)", &offset, float(m_bounds.min[m_clip_axis]), float(m_bounds.max[m_clip_axis]))) {
     m_clip_offset_mm = offset;
     m_section_dirty = true;
   }
