@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "ido/core/error.h"
+#include "ido/sim/generators.h"
 
 namespace ido::drill {
 namespace {
@@ -24,18 +25,6 @@ void orient(geometry::TetMesh& m) {
 
 // Kuhn subdivision of a cube with corner ids c[bits] (bit 0 = x, 1 = y, 2 = z): 6 tets along
 // the diagonal 0 → 7, one per axis permutation.
-void kuhn(const std::array<std::int32_t, 8>& c, std::vector<Tet>& out) {
-  static constexpr int kPerm[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
-  for (const auto& p : kPerm) {
-    int b0 = 0;
-    const int b1 = b0 | (1 << p[0]);
-    const int b2 = b1 | (1 << p[1]);
-    const int b3 = b2 | (1 << p[2]);
-    out.push_back({c[static_cast<std::size_t>(b0)], c[static_cast<std::size_t>(b1)], c[static_cast<std::size_t>(b2)],
-                   c[static_cast<std::size_t>(b3)]});
-  }
-}
-
 double parse_number(std::string_view text, std::string_view spec) {
   double v = 0.0;
   const auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
@@ -75,21 +64,10 @@ geometry::TetMesh make_block(const Vec3& size_mm, double cell_mm) {
     cells *= n[static_cast<std::size_t>(a)];
   }
   if (cells * 6.0 > 1e7) throw InvalidInput("block: more than 10^7 tetrahedra; use a larger cell");
-  geometry::TetMesh m;
-  auto id = [&](int i, int j, int k) { return static_cast<std::int32_t>((k * (n[1] + 1) + j) * (n[0] + 1) + i); };
-  for (int k = 0; k <= n[2]; ++k)
-    for (int j = 0; j <= n[1]; ++j)
-      for (int i = 0; i <= n[0]; ++i)
-        m.vertices.emplace_back(size_mm.x() * i / n[0], size_mm.y() * j / n[1], size_mm.z() * k / n[2]);
-  for (int k = 0; k < n[2]; ++k)
-    for (int j = 0; j < n[1]; ++j)
-      for (int i = 0; i < n[0]; ++i) {
-        std::array<std::int32_t, 8> c{};
-        for (int b = 0; b < 8; ++b) c[static_cast<std::size_t>(b)] = id(i + (b & 1), j + ((b >> 1) & 1), k + ((b >> 2) & 1));
-        kuhn(c, m.tets);
-      }
-  orient(m);
-  return m;
+  // The box's hexahedral grid and its 6-tetrahedron split are the simulation library's (one
+  // generator for both): vertex (i, j, k) at size·(i, j, k)/n, the 6 Kuhn tetrahedra around
+  // each cell's main diagonal, positively oriented.
+  return sim::make_beam(size_mm, Vec3i(n[0], n[1], n[2]));
 }
 
 geometry::TetMesh make_shape(std::string_view spec) {
