@@ -13,12 +13,17 @@
 #include "ido/core/error.h"
 #include "ido/geometry/mesh_checks.h"
 #include "ido/geometry/self_intersection.h"
+#include "ido/geometry/winding_number.h"
+#include "ido/meshing/remesh.h"
+#include "ido/meshing/signed_distance.h"
 #include "ido/segment/balloon.h"
 #include "support/test_support.h"
 
 namespace ido::segment {
 namespace {
 
+// Overlapping closed spheres (a self-intersecting surface) → one closed, exact-checked
+// surface of the union; a ring of overlapping spheres → a torus (Euler 0).
 geometry::TriangleMesh union_of_spheres(const std::vector<Vec3>& centres, double r) {
   geometry::TriangleMesh m;
   for (const Vec3& c : centres) {
@@ -28,6 +33,89 @@ geometry::TriangleMesh union_of_spheres(const std::vector<Vec3>& centres, double
     for (const Tri& t : s.triangles) m.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
   }
   return m;
+}
+
+// The repair's signed distance evaluates the winding number only within about a grid spacing
+// of the surface (and near uncounted triangles) and takes every other sign from a neighbour
+// or a connected component. The full path — the winding number at every grid point, the
+// distance to the nearest counted triangle by brute force — must give the same field. Both
+// sign methods: the crossing parity these closed meshes take by default, and the winding
+// number with its safe-step components.
+void expect_field_equals_full_evaluation(const geometry::TriangleMesh& m, const image::Volume<float>& grid,
+                                         meshing::SignedDistanceOptions o) {
+  for (const auto method : {meshing::SignMethod::automatic, meshing::SignMethod::winding_number}) {
+    o.sign = method;
+    const image::Volume<float> f = meshing::signed_distance(m, grid, o);
+    const geometry::WindingNumber winding(m, {.beta = o.winding_beta});
+    std::int64_t wrong_sign = 0, wrong_distance = 0, inside = 0;
+    for (std::int64_t k = 0; k < grid.size(2); ++k)
+      for (std::int64_t j = 0; j < grid.size(1); ++j)
+        for (std::int64_t i = 0; i < grid.size(0); ++i) {
+          const Vec3 p = grid.index_to_world(Vec3(double(i), double(j), double(k)));
+          const bool in = winding.at(p) > 0.5;
+          inside += in ? 1 : 0;
+          if ((f(i, j, k) < 0.0f) != in) ++wrong_sign;
+          double d = o.band_mm;
+          for (std::size_t t = 0; t < m.triangles.size(); ++t) {
+            if (!o.distance_triangles.empty() && !o.distance_triangles[t]) continue;
+            const Tri& tr = m.triangles[t];
+            const Vec3 c = meshing::closest_point_on_triangle_mm(p, m.vertices[tr[0]], m.vertices[tr[1]], m.vertices[tr[2]]);
+            d = std::min(d, (c - p).norm());
+          }
+          if (std::abs(std::abs(double(f(i, j, k))) - d) > 1e-5) ++wrong_distance;
+        }
+    EXPECT_GT(inside, 0);
+    EXPECT_EQ(wrong_sign, 0) << int(method);
+    EXPECT_EQ(wrong_distance, 0) << int(method);
+  }
+}
+
+TEST(TopologyRepair, SignedDistanceFastSignEqualsWindingNumberEverywhere) {
+  // Two overlapping spheres: the intersecting triangles are left out of the distance, as the
+  // repair does, so grid points near them must still read the winding number directly.
+  const auto two = union_of_spheres({Vec3(0, 0, 0), Vec3(3.0, 0, 0)}, 2.5);
+  const auto pairs = geometry::self_intersections(two);
+  ASSERT_FALSE(pairs.empty());
+  meshing::SignedDistanceOptions o;
+  o.band_mm = 1.0;
+  o.distance_triangles.assign(two.triangles.size(), 1);
+  for (const auto& [a, b] : pairs) o.distance_triangles[std::size_t(a)] = o.distance_triangles[std::size_t(b)] = 0;
+  expect_field_equals_full_evaluation(two, image::Volume<float>({24, 16, 16}, Vec3::Constant(0.5), Vec3(-3.1, -3.9, -4.05)), o);
+  // Uncounted triangles far from the counted ones: a second sphere left out of the distance
+  // entirely still bounds an inside, which only the direct evaluations near it can see.
+  const auto apart = union_of_spheres({Vec3(0, 0, 0), Vec3(6.0, 0, 0)}, 2.0);
+  meshing::SignedDistanceOptions half;
+  half.band_mm = 1.0;
+  half.distance_triangles.assign(apart.triangles.size(), 1);
+  std::fill(half.distance_triangles.begin() + std::ptrdiff_t(apart.triangles.size() / 2), half.distance_triangles.end(), 0);
+  expect_field_equals_full_evaluation(apart, image::Volume<float>({26, 12, 12}, Vec3::Constant(0.5), Vec3(-3.1, -2.9, -2.95)), half);
+  // Every triangle counted, an anisotropic rotated grid and a band of three spacings.
+  meshing::SignedDistanceOptions all;
+  all.band_mm = 3 * 0.7;
+  image::Volume<float> rotated({20, 18, 14}, Vec3(0.45, 0.5, 0.7), Vec3(-4.2, -4.3, -4.4));
+  rotated.set_direction(test::rotation(0.3, -0.2, 0.5));
+  expect_field_equals_full_evaluation(two, rotated, all);
+  // A ring of spheres (genus one once repaired): an inner far region the surface encloses.
+  std::vector<Vec3> ring;
+  for (int i = 0; i < 8; ++i) ring.emplace_back(6 * std::cos(2 * kPi * i / 8), 6 * std::sin(2 * kPi * i / 8), 0);
+  const auto torus = union_of_spheres(ring, 2.6);
+  expect_field_equals_full_evaluation(torus, image::Volume<float>({36, 36, 14}, Vec3::Constant(0.5), Vec3(-9.1, -8.9, -3.3)), all);
+}
+
+// The remesher's check of its input (each edge runs once each way) still rejects an open
+// mesh and a mesh with one triangle turned over, and accepts the closed ones it remeshes.
+TEST(TopologyRepair, RemesherInputCheckRejectsOpenAndMisorientedMeshes) {
+  const auto s = balloon_icosphere(Vec3::Zero(), 2.0, 1);
+  EXPECT_NO_THROW(meshing::SurfaceRemesher{s});
+  auto open = s;
+  open.triangles.pop_back();
+  EXPECT_THROW(meshing::SurfaceRemesher{open}, InvalidInput);
+  auto flipped = s;
+  std::swap(flipped.triangles[3][0], flipped.triangles[3][1]);
+  EXPECT_THROW(meshing::SurfaceRemesher{flipped}, InvalidInput);
+  auto doubled = s;
+  doubled.triangles.push_back(s.triangles[0]);
+  EXPECT_THROW(meshing::SurfaceRemesher{doubled}, InvalidInput);
 }
 
 TEST(TopologyRepair, MergesOverlapsIntoAValidSurfaceOfTheRightTopology) {
