@@ -19,6 +19,7 @@
 #include "command.h"
 #include "ido/core/error.h"
 #include "ido/geometry/aabb.h"
+#include "ido/image/index_box.h"
 #include "ido/io/mesh_io.h"
 #include "ido/io/report_json.h"
 #include "ido/io/volume_io.h"
@@ -118,20 +119,9 @@ viz::Image segment_picture(const geometry::TriangleMesh& surface, const viz::Cam
 /// [lo, hi] (mm) with a margin, as a one-voxel-thick volume on the CT's grid.
 image::Volume<float> seed_slice(const image::Volume<float>& ct, const Vec3& seed, const Vec3& lo, const Vec3& hi) {
   const Vec3 margin = 0.15 * (hi - lo) + 2.0 * ct.spacing().maxCoeff() * Vec3::Ones();
-  Vec3 imin = Vec3::Constant(INFINITY), imax = Vec3::Constant(-INFINITY);
-  for (int c = 0; c < 8; ++c) {
-    const Vec3 corner((c & 1) ? hi.x() + margin.x() : lo.x() - margin.x(), (c & 2) ? hi.y() + margin.y() : lo.y() - margin.y(),
-                      (c & 4) ? hi.z() + margin.z() : lo.z() - margin.z());
-    const Vec3 idx = ct.world_to_index(corner);
-    imin = imin.cwiseMin(idx);
-    imax = imax.cwiseMax(idx);
-  }
-  auto clamp_index = [&](double v, int axis) {
-    return std::clamp<std::int64_t>(static_cast<std::int64_t>(std::lround(v)), 0, ct.size(axis) - 1);
-  };
-  const std::int64_t i0 = clamp_index(std::floor(imin.x()), 0), i1 = clamp_index(std::ceil(imax.x()), 0);
-  const std::int64_t j0 = clamp_index(std::floor(imin.y()), 1), j1 = clamp_index(std::ceil(imax.y()), 1);
-  const std::int64_t k = clamp_index(ct.world_to_index(seed).z(), 2);
+  const image::IndexBox crop = image::voxels_in_box(ct, geometry::Aabb{lo - margin, hi + margin});
+  const std::int64_t i0 = crop.lo[0], i1 = crop.hi[0], j0 = crop.lo[1], j1 = crop.hi[1];
+  const std::int64_t k = std::clamp<std::int64_t>(std::lround(ct.world_to_index(seed).z()), 0, ct.size(2) - 1);
   image::Volume<float> out({i1 - i0 + 1, j1 - j0 + 1, 1}, ct.spacing(),
                            ct.index_to_world(Vec3(double(i0), double(j0), double(k))), ct.direction());
   for (std::int64_t j = j0; j <= j1; ++j)

@@ -2,6 +2,7 @@
 // Separable Gaussian smoothing, finite-difference gradients and robust statistics; the
 // project's own straightforward implementations (no algorithm beyond the textbook ones).
 #include "ido/image/filters.h"
+#include "ido/image/index_box.h"
 
 #include <algorithm>
 #include <cmath>
@@ -212,21 +213,9 @@ RobustStats robust_stats_in_ball(const Volume<float>& volume, const Vec3& centre
   for (int a = 0; a < 3; ++a)
     if (!(c[a] >= -0.5 && c[a] <= double(volume.size(a)) - 0.5))
       throw InvalidInput("robust_stats_in_ball: centre lies outside the volume");
-  // Index-space bounding box of the ball: |Δindex_a| ≤ r · ‖row a of world_to_index‖.
-  std::int64_t lo[3], hi[3];
-  for (int a = 0; a < 3; ++a) {
-    const double reach = radius_mm * volume.world_to_index_matrix().row(a).norm();
-    lo[a] = std::max<std::int64_t>(0, static_cast<std::int64_t>(std::floor(c[a] - reach)));
-    hi[a] = std::min<std::int64_t>(volume.size(a) - 1, static_cast<std::int64_t>(std::ceil(c[a] + reach)));
-  }
   std::vector<double> values;
-  const double r2 = radius_mm * radius_mm;
-  for (std::int64_t k = lo[2]; k <= hi[2]; ++k)
-    for (std::int64_t j = lo[1]; j <= hi[1]; ++j)
-      for (std::int64_t i = lo[0]; i <= hi[0]; ++i) {
-        const Vec3 w = volume.index_to_world(Vec3(double(i), double(j), double(k)));
-        if ((w - centre_mm).squaredNorm() <= r2) values.push_back(volume(i, j, k));
-      }
+  for_each_voxel_in_ball(volume, centre_mm, radius_mm,
+                         [&](std::int64_t i, std::int64_t j, std::int64_t k) { values.push_back(volume(i, j, k)); });
   if (values.empty()) {
     const auto clampi = [&](int a) {
       return std::clamp<std::int64_t>(std::llround(c[a]), 0, volume.size(a) - 1);

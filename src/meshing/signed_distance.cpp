@@ -16,6 +16,7 @@
 #include "ido/geometry/mesh_topology.h"
 #include "ido/geometry/predicates.h"
 #include "ido/geometry/winding_number.h"
+#include "ido/image/index_box.h"
 #include "ido/meshing/voxelize.h"
 
 namespace ido::meshing {
@@ -89,31 +90,27 @@ image::Volume<float> signed_distance(const geometry::TriangleMesh& surface,
   std::vector<std::int32_t> tris;
   for (std::size_t t = 0; t < surface.triangles.size(); ++t)
     if (options.distance_triangles.empty() || options.distance_triangles[t]) tris.push_back(std::int32_t(t));
-  struct Box { std::int64_t lo[3], hi[3]; };
-  std::vector<Box> boxes(tris.size());
-  const Vec3 pad_index = (Vec3::Constant(band).array() / grid.spacing().array()).matrix();
-  for (std::size_t q = 0; q < tris.size(); ++q) {
-    const Tri& t = surface.triangles[tris[q]];
+  // The grid points within the band of a triangle: its index-space box padded by the band; a
+  // rotated grid maps an axis box to a rotated box, so there every axis is padded by the most.
+  const auto padded_box = [&](const Tri& t, double band_mm) {
+    const Vec3 pad_axis = (Vec3::Constant(band_mm).array() / grid.spacing().array()).matrix();
+    const Vec3 pad = grid.direction().isIdentity(1e-9) ? pad_axis : Vec3::Constant(pad_axis.maxCoeff());
     Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
     for (std::int32_t v : t) {
       const Vec3 idx = grid.world_to_index(surface.vertices[v]);
       lo = lo.cwiseMin(idx);
       hi = hi.cwiseMax(idx);
     }
-    // A rotated grid maps an axis box to a rotated box: pad by the full band on each axis.
-    const double pad_any = pad_index.maxCoeff();
-    for (int a = 0; a < 3; ++a) {
-      const double pad = grid.direction().isIdentity(1e-9) ? pad_index[a] : pad_any;
-      boxes[q].lo[a] = std::max<std::int64_t>(0, static_cast<std::int64_t>(std::ceil(lo[a] - pad)));
-      boxes[q].hi[a] = std::min<std::int64_t>(n[a] - 1, static_cast<std::int64_t>(std::floor(hi[a] + pad)));
-    }
-  }
+    return image::IndexBox::of_centres(lo - pad, hi + pad, n);
+  };
+  std::vector<image::IndexBox> boxes(tris.size());
+  for (std::size_t q = 0; q < tris.size(); ++q) boxes[q] = padded_box(surface.triangles[tris[q]], band);
   // Bucket triangles per k-slab for the parallel pass.
   const std::int64_t slab = 4;
   const std::int64_t nslabs = (n[2] + slab - 1) / slab;
   std::vector<std::vector<std::int32_t>> per_slab(static_cast<std::size_t>(nslabs));
   for (std::size_t q = 0; q < tris.size(); ++q) {
-    if (boxes[q].lo[0] > boxes[q].hi[0] || boxes[q].lo[1] > boxes[q].hi[1] || boxes[q].lo[2] > boxes[q].hi[2]) continue;
+    if (boxes[q].empty()) continue;
     for (std::int64_t s = boxes[q].lo[2] / slab; s <= boxes[q].hi[2] / slab; ++s)
       per_slab[static_cast<std::size_t>(s)].push_back(std::int32_t(q));
   }
@@ -124,7 +121,7 @@ image::Volume<float> signed_distance(const geometry::TriangleMesh& surface,
         for (std::int32_t q : per_slab[s]) {
           const Tri& t = surface.triangles[tris[q]];
           const Vec3 &a = surface.vertices[t[0]], &b = surface.vertices[t[1]], &c = surface.vertices[t[2]];
-          const Box& bx = boxes[q];
+          const image::IndexBox& bx = boxes[q];
           // The distance to the triangle is at least the distance to its plane: a point whose
           // plane distance already exceeds what its slot holds cannot lower it (the margin
           // covers the rounding of both), so the closest-point query is skipped there.
@@ -166,31 +163,16 @@ image::Volume<float> signed_distance(const geometry::TriangleMesh& surface,
   // elsewhere); empty when every triangle counts.
   std::vector<float> uncounted;
   if (!options.distance_triangles.empty()) {
-    const Vec3 pad_reach = (Vec3::Constant(reach).array() / grid.spacing().array()).matrix();
     for (std::size_t t = 0; t < surface.triangles.size(); ++t) {
       if (options.distance_triangles[t]) continue;
       if (uncounted.empty()) uncounted.assign(dist.size(), static_cast<float>(reach));
       const Tri& tr = surface.triangles[t];
-      Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
-      for (std::int32_t v : tr) {
-        const Vec3 idx = grid.world_to_index(surface.vertices[v]);
-        lo = lo.cwiseMin(idx);
-        hi = hi.cwiseMax(idx);
-      }
-      std::int64_t bl[3], bh[3];
-      for (int a = 0; a < 3; ++a) {
-        const double pad = grid.direction().isIdentity(1e-9) ? pad_reach[a] : pad_reach.maxCoeff();
-        bl[a] = std::max<std::int64_t>(0, static_cast<std::int64_t>(std::ceil(lo[a] - pad)));
-        bh[a] = std::min<std::int64_t>(n[a] - 1, static_cast<std::int64_t>(std::floor(hi[a] + pad)));
-      }
       const Vec3 &a = surface.vertices[tr[0]], &b = surface.vertices[tr[1]], &c = surface.vertices[tr[2]];
-      for (std::int64_t k = bl[2]; k <= bh[2]; ++k)
-        for (std::int64_t j = bl[1]; j <= bh[1]; ++j)
-          for (std::int64_t i = bl[0]; i <= bh[0]; ++i) {
-            const Vec3 p = grid.index_to_world(Vec3(double(i), double(j), double(k)));
-            float& slot = uncounted[out.linear_index(i, j, k)];
-            slot = std::min(slot, static_cast<float>((closest_point_on_triangle_mm(p, a, b, c) - p).norm()));
-          }
+      padded_box(tr, reach).for_each([&](std::int64_t i, std::int64_t j, std::int64_t k) {
+        const Vec3 p = grid.index_to_world(Vec3(double(i), double(j), double(k)));
+        float& slot = uncounted[out.linear_index(i, j, k)];
+        slot = std::min(slot, static_cast<float>((closest_point_on_triangle_mm(p, a, b, c) - p).norm()));
+      });
     }
   }
   auto bound = [&](std::size_t v) {

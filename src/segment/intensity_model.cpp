@@ -7,24 +7,10 @@
 
 #include "ido/core/error.h"
 #include "ido/image/filters.h"
+#include "ido/image/index_box.h"
 
 namespace ido::segment {
 namespace {
-
-/// Calls @p f(i, j, k) for every voxel of @p ct whose centre lies within @p radius mm of
-/// @p s (world mm).
-template <class F>
-void for_voxels_in_ball(const image::Volume<float>& ct, const Vec3& s, double radius, F&& f) {
-  const Vec3 idx = ct.world_to_index(s);
-  const double rmax = (Vec3::Constant(radius).array() / ct.spacing().array()).maxCoeff();
-  for (std::int64_t k = std::int64_t(std::floor(idx[2] - rmax)); k <= std::int64_t(std::ceil(idx[2] + rmax)); ++k)
-    for (std::int64_t j = std::int64_t(std::floor(idx[1] - rmax)); j <= std::int64_t(std::ceil(idx[1] + rmax)); ++j)
-      for (std::int64_t i = std::int64_t(std::floor(idx[0] - rmax)); i <= std::int64_t(std::ceil(idx[0] + rmax)); ++i) {
-        if (!ct.contains(i, j, k)) continue;
-        if ((ct.index_to_world(Vec3(double(i), double(j), double(k))) - s).norm() > radius) continue;
-        f(i, j, k);
-      }
-}
 
 /// Standard deviation of z − G ∗ z for unit white noise z and the separable sampled kernel G
 /// gaussian_smooth applies: Var = 1 − 2 g₀ + Σ g², with g₀ = Π_a g_a[centre] and
@@ -70,7 +56,7 @@ IntensityModel estimate_intensity_model(const image::Volume<float>& ct, const st
                            std::to_string(s[2]) + ") mm lies outside the volume");
     // Gather the ball's voxels (the foundation's robust_stats_in_ball works per seed; the
     // seeds are pooled here).
-    for_voxels_in_ball(ct, s, radius, [&](std::int64_t i, std::int64_t j, std::int64_t k) { values.push_back(ct(i, j, k)); });
+    image::for_each_voxel_in_ball(ct, s, radius, [&](std::int64_t i, std::int64_t j, std::int64_t k) { values.push_back(ct(i, j, k)); });
     if (values.empty()) values.push_back(ct.sample(s));
   }
   const image::RobustStats stats = image::robust_stats(values);
@@ -97,7 +83,7 @@ IntensityModel estimate_intensity_model(const image::Volume<float>& ct, const st
   const double radius = options.residual_ball_factor * seed_ball_radius(ct, options);
   std::vector<double> residuals;
   for (const Vec3& s : seeds_mm)
-    for_voxels_in_ball(ct, s, radius, [&](std::int64_t i, std::int64_t j, std::int64_t k) {
+    image::for_each_voxel_in_ball(ct, s, radius, [&](std::int64_t i, std::int64_t j, std::int64_t k) {
       if (!organ_like(i, j, k) || !organ_like(i - 1, j, k) || !organ_like(i + 1, j, k) || !organ_like(i, j - 1, k) ||
           !organ_like(i, j + 1, k) || !organ_like(i, j, k - 1) || !organ_like(i, j, k + 1))
         return;

@@ -13,6 +13,7 @@
 
 #include "ido/core/error.h"
 #include "ido/image/filters.h"
+#include "ido/image/index_box.h"
 #include "ido/meshing/distance_field.h"
 
 namespace ido::segment {
@@ -182,20 +183,9 @@ LeakGuard::LeakGuard(const image::Volume<float>& smoothed, const IntensityModel&
   for (const Vec3& p : o.stop_points_mm) {
     const std::size_t l = *voxel_of(smoothed, g, p);
     const double r = std::max(region[l] ? 1.5 * ridge_radius(g, inside, l) : 0.0, 2.0 * h);
-    const Vec3 c = smoothed.world_to_index(p);
-    Index3 lo, hi;
-    for (int a = 0; a < 3; ++a) {
-      const double ext = r / smoothed.spacing()[a] + 1;
-      lo[a] = std::max<std::int64_t>(0, std::int64_t(std::floor(c[a] - ext)));
-      hi[a] = std::min<std::int64_t>(g.n[a] - 1, std::int64_t(std::ceil(c[a] + ext)));
-    }
-    for (std::int64_t k = lo[2]; k <= hi[2]; ++k)
-      for (std::int64_t j = lo[1]; j <= hi[1]; ++j)
-        for (std::int64_t i = lo[0]; i <= hi[0]; ++i) {
-          const std::size_t q = g.at(i, j, k);
-          if (region[q] && (smoothed.index_to_world(Vec3(double(i), double(j), double(k))) - p).norm() <= r)
-            cause[q] = std::uint8_t(LeakCause::StopPoint);
-        }
+    image::for_each_voxel_in_ball(smoothed, p, r, [&](std::int64_t i, std::int64_t j, std::int64_t k) {
+      if (const std::size_t q = g.at(i, j, k); region[q]) cause[q] = std::uint8_t(LeakCause::StopPoint);
+    });
   }
   for (std::size_t s : starts) cause[s] = 0;  // a seed is never closed to its own balloon
   // What is reached from the seeds without crossing a closed voxel stays open; the rest of the

@@ -14,6 +14,7 @@
 #include "ido/core/statistics.h"
 #include "ido/geometry/mesh_checks.h"
 #include "ido/geometry/predicates.h"
+#include "ido/image/index_box.h"
 #include "ido/meshing/distance_field.h"
 #include "ido/meshing/voxelize.h"
 
@@ -48,16 +49,10 @@ std::vector<double> directed_distances(const std::vector<std::size_t>& from, con
     return Index3{std::int64_t(li % std::size_t(n[0])), std::int64_t((li / std::size_t(n[0])) % std::size_t(n[1])),
                   std::int64_t(li / std::size_t(n[0] * n[1]))};
   };
-  Index3 lo{n[0], n[1], n[2]}, hi{-1, -1, -1};
+  image::IndexBox box = image::IndexBox::none();
   for (const auto* set : {&from, &to})
-    for (std::size_t li : *set) {
-      const Index3 p = unpack(li);
-      for (int a = 0; a < 3; ++a) {
-        lo[a] = std::min(lo[a], p[a]);
-        hi[a] = std::max(hi[a], p[a]);
-      }
-    }
-  const Index3 b{hi[0] - lo[0] + 1, hi[1] - lo[1] + 1, hi[2] - lo[2] + 1};
+    for (std::size_t li : *set) box.extend(unpack(li));
+  const Index3 &lo = box.lo, b = box.extent();
   auto local = [&](std::size_t li) {
     const Index3 p = unpack(li);
     return std::size_t((p[0] - lo[0]) + b[0] * ((p[1] - lo[1]) + b[1] * (p[2] - lo[2])));

@@ -149,6 +149,16 @@ class Volume {
     return b;
   }
 
+  /// Continuous-index bounds of the world box @p world_mm: the index-space box of its eight
+  /// corners (for a grid rotated against the world axes, a box holding the rotated one).
+  [[nodiscard]] geometry::Aabb index_bounds(const geometry::Aabb& world_mm) const {
+    geometry::Aabb b;
+    for (int c = 0; c < 8; ++c)
+      b.extend(world_to_index(Vec3((c & 1) ? world_mm.max.x() : world_mm.min.x(), (c & 2) ? world_mm.max.y() : world_mm.min.y(),
+                                   (c & 4) ? world_mm.max.z() : world_mm.min.z())));
+    return b;
+  }
+
   // ---- sampling ----------------------------------------------------------------------
   /// Trilinear interpolation at a continuous index. Outside the grid, Clamp uses the
   /// border value, Constant returns @p outside.
