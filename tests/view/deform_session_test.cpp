@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // The scene the Deform workspace steps on its worker thread: single steps, the pull, the
 // integrator switched between steps; parameters changed between steps continue the run bit for
-// bit as the library's scene with the new values from that state does, and a bad value is
-// refused naming its JSON pointer.
+// bit as the library does (a model's setter in place, or the scene read again for a density);
+// the divergence rule is sim::run's.
 #include "ido/view/deform_session.h"
 
 #include <chrono>
@@ -14,6 +14,11 @@
 
 #include "ido/core/error.h"
 #include "ido/io/scene.h"
+#include "ido/sim/diagnostics.h"
+#include "ido/sim/fem_common.h"
+#include "ido/sim/mass_spring.h"
+#include "ido/sim/runner.h"
+#include "support/clamped_cube_scene.h"
 #include "support/test_support.h"
 
 namespace ido {
@@ -109,7 +114,8 @@ TEST(DeformSession, ParametersChangedBetweenStepsContinueAsTheLibraryWithTheNewV
   for (const auto& p : params) values.push_back(p.value);
   EXPECT_THROW(session.set_parameters({1.0}), InvalidInput);
 
-  // 7 steps; then a stiffer, denser, damped beam for 9 more.
+  // 7 steps; then a stiffer, denser, damped beam for 9 more. The density is a number the world
+  // is built from (the particles' masses), so the scene read again takes over.
   for (int i = 0; i < 7; ++i) session.step_once();
   ASSERT_EQ(wait_steps(session, 7)->steps, 7);
   values[0] = 3e5;
@@ -156,6 +162,154 @@ TEST(DeformSession, ParametersChangedBetweenStepsContinueAsTheLibraryWithTheNewV
   EXPECT_EQ(st->changes.size(), 3u);
   b.world.step(b.dt_s);
   EXPECT_TRUE(st->positions_mm == b.world.particles().positions());
+}
+
+/// The newest state once it shows @p changes parameter changes (the session publishes at once
+/// while paused).
+std::shared_ptr<const view::DeformState> wait_changes(view::DeformSession& s, std::size_t changes) {
+  for (auto t0 = std::chrono::steady_clock::now(); std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60);) {
+    auto st = s.latest();
+    if (st && (st->changes.size() >= changes || !st->parameter_error.empty())) return st;
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  return s.latest();
+}
+
+// Young's modulus changed between steps goes to the running model (set_material): the state
+// goes on where it was — the positions and the momentum (so the velocities) right after the
+// change are those before it — and the run is, bit for bit, the library's run that calls the
+// model's set_youngs_modulus at that step, the implicit solver's warm start and the
+// corotational rotations kept (a world built anew from the changed scene, which starts them
+// afresh, ends elsewhere).
+TEST(DeformSession, ModulusChangedMidRunGoesOnAsTheModelsSetYoungsModulus) {
+  const std::string text = R"({
+    "dt_s": 0.005, "steps": 1, "integrator": "implicit_euler", "gravity_mm_s2": [0, 0, -9806.65],
+    "damping": {"rayleigh_mass_per_s": 2.0},
+    "bodies": [{"name": "beam", "mesh": {"generator": "beam", "size_mm": [30, 6, 6], "cells": [6, 1, 1]},
+                "model": "corotational_fem",
+                "material": {"youngs_modulus_pa": 1e5, "poisson_ratio": 0.3, "density_kg_m3": 1000},
+                "fixed": [{"box_min_mm": [-1, -1, -1], "box_max_mm": [0.001, 7, 7]}]}]})";
+  const fs::path file = test::scratch_dir("deform-modulus") / "beam.json";
+  std::ofstream(file) << text;
+  view::DeformSession session(file);
+  ASSERT_EQ(session.parameters()[0].pointer, "/bodies/0/material/youngs_modulus_pa");
+  std::vector<double> values;
+  for (const auto& p : session.parameters()) values.push_back(p.value);
+
+  for (int i = 0; i < 7; ++i) session.step_once();
+  const auto before = wait_steps(session, 7);
+  ASSERT_EQ(before->steps, 7);
+  values[0] = 3e5;
+  session.set_parameters(values);
+  const auto changed = wait_changes(session, 1);
+  ASSERT_EQ(changed->changes.size(), 1u) << changed->parameter_error;
+  EXPECT_EQ(changed->changes[0].step, 7);
+  EXPECT_EQ(changed->steps, 7);
+  EXPECT_EQ(changed->time_s, before->time_s);
+  EXPECT_TRUE(changed->positions_mm == before->positions_mm) << "the change moved the particles";
+  EXPECT_TRUE(changed->linear_momentum == before->linear_momentum) << "the change touched the velocities";
+  for (int i = 0; i < 9; ++i) session.step_once();
+  const auto st = wait_steps(session, 16);
+  ASSERT_EQ(st->steps, 16);
+
+  // The library: the scene's world, the model's setter after step 7, on to step 16.
+  io::Scene lib = io::parse_scene(text, "beam.json", file.parent_path());
+  for (int i = 0; i < 7; ++i) lib.world.step(lib.dt_s);
+  const std::vector<Vec3> x7 = lib.world.particles().positions(), v7 = lib.world.particles().velocities();
+  dynamic_cast<sim::TetFemModel&>(*lib.world.models()[lib.bodies[0].model_index]).set_youngs_modulus(3e5);
+  for (int i = 0; i < 9; ++i) lib.world.step(lib.dt_s);
+  EXPECT_TRUE(st->positions_mm == lib.world.particles().positions()) << "not the library's run with the setter";
+  EXPECT_TRUE(st->linear_momentum == sim::momentum(lib.world.particles()).linear_kg_mm_s);
+  EXPECT_EQ(st->time_s, lib.world.time_s());
+
+  // A world built anew from the changed scene, given the same positions and velocities.
+  nlohmann::json doc = nlohmann::json::parse(text);
+  doc["bodies"][0]["material"]["youngs_modulus_pa"] = 3e5;
+  io::Scene fresh = io::parse_scene(doc.dump(), "beam.json", file.parent_path());
+  fresh.world.particles().positions() = x7;
+  fresh.world.particles().velocities() = v7;
+  for (int i = 0; i < 9; ++i) fresh.world.step(fresh.dt_s);
+  EXPECT_FALSE(st->positions_mm == fresh.world.particles().positions()) << "the integrator's state was not kept";
+}
+
+// A spring body's stiffness and the Rayleigh damping changed between steps go to the running
+// world (MassSpring::set_stiffness, ExternalForces::damping): bit for bit the library's run with
+// those calls at that step.
+TEST(DeformSession, SpringStiffnessAndDampingChangeInPlace) {
+  const std::string text = R"({
+    "dt_s": 0.002, "steps": 1, "integrator": "implicit_euler", "gravity_mm_s2": [0, 0, -9806.65],
+    "bodies": [{"name": "springs", "mesh": {"generator": "beam", "size_mm": [20, 4, 4], "cells": [5, 1, 1]},
+                "model": "mass_spring", "mass_spring": {"stiffness_n_per_mm": 0.5},
+                "material": {"youngs_modulus_pa": 1e5, "poisson_ratio": 0.3, "density_kg_m3": 1000},
+                "fixed": [{"box_min_mm": [-1, -1, -1], "box_max_mm": [0.001, 5, 5]}]}]})";
+  const fs::path file = test::scratch_dir("deform-springs") / "springs.json";
+  std::ofstream(file) << text;
+  view::DeformSession session(file);
+  const auto& params = session.parameters();
+  ASSERT_EQ(params.size(), 6u);
+  EXPECT_EQ(params[3].pointer, "/bodies/0/mass_spring/stiffness_n_per_mm");
+  EXPECT_EQ(params[4].pointer, "/damping/rayleigh_mass_per_s");
+  std::vector<double> values;
+  for (const auto& p : params) values.push_back(p.value);
+  for (int i = 0; i < 5; ++i) session.step_once();
+  ASSERT_EQ(wait_steps(session, 5)->steps, 5);
+  values[3] = 2.0;
+  values[4] = 3.0;
+  session.set_parameters(values);
+  ASSERT_EQ(wait_changes(session, 2)->changes.size(), 2u);
+  for (int i = 0; i < 10; ++i) session.step_once();
+  const auto st = wait_steps(session, 15);
+  ASSERT_EQ(st->steps, 15);
+
+  io::Scene lib = io::parse_scene(text, "springs.json", file.parent_path());
+  io::Scene unchanged = io::parse_scene(text, "springs.json", file.parent_path());
+  for (int i = 0; i < 5; ++i) lib.world.step(lib.dt_s);
+  dynamic_cast<sim::MassSpring&>(*lib.world.models()[lib.bodies[0].model_index]).set_stiffness(2.0);
+  lib.world.external().damping.mass_per_s = 3.0;
+  for (int i = 0; i < 10; ++i) lib.world.step(lib.dt_s);
+  for (int i = 0; i < 15; ++i) unchanged.world.step(unchanged.dt_s);
+  EXPECT_TRUE(st->positions_mm == lib.world.particles().positions()) << "not the library's run with the setters";
+  EXPECT_FALSE(st->positions_mm == unchanged.world.particles().positions()) << "the new values made no difference";
+}
+
+// The session stops a diverging run by sim::run's rule, at the same step: the clamped cube
+// under explicit Euler far beyond its stable step (10 ms) stops with the energy bound's cause at
+// the step at which sim::run throws Diverged (with the scene's floor, energy checked every
+// step); just below the stable step (0.2 ms) it runs on.
+TEST(DeformSession, DivergenceIsCalledAtTheStepSimRunCallsIt) {
+  std::int64_t diverged_at = -1;
+  {
+    io::Scene scene = io::parse_scene(test::clamped_cube_scene("explicit_euler", 0.01, 4000, 1).dump(), "cube.json", ".");
+    try {
+      (void)sim::run(scene.world, io::run_options(scene));
+    } catch (const sim::Diverged& e) {
+      diverged_at = e.step();
+    }
+  }
+  ASSERT_GT(diverged_at, 0);
+  view::DeformSession session(
+      io::parse_scene(test::clamped_cube_scene("explicit_euler", 0.01, 4000, 1).dump(), "cube.json", "."));
+  session.set_running(true);
+  std::shared_ptr<const view::DeformState> st;
+  for (auto t0 = std::chrono::steady_clock::now(); std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60);) {
+    st = session.latest();
+    if (st && !st->error.empty()) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  session.set_running(false);
+  ASSERT_TRUE(st);
+  ASSERT_FALSE(st->error.empty()) << "no divergence after " << st->steps << " steps";
+  EXPECT_EQ(st->steps, diverged_at);
+  EXPECT_EQ(st->error.rfind("simulation diverged at step " + std::to_string(diverged_at) + " (t = ", 0), 0u) << st->error;
+  EXPECT_NE(st->error.find("kinetic + elastic energy"), std::string::npos) << st->error;
+  EXPECT_NE(st->error.find("reduce dt_s (now 0.01)"), std::string::npos) << st->error;
+
+  view::DeformSession stable(
+      io::parse_scene(test::clamped_cube_scene("explicit_euler", 0.0002, 4000, 1).dump(), "cube.json", "."));
+  for (int i = 0; i < 500; ++i) stable.step_once();
+  const auto settled = wait_steps(stable, 500);
+  EXPECT_EQ(settled->steps, 500);
+  EXPECT_TRUE(settled->error.empty()) << settled->error;
 }
 
 }  // namespace
