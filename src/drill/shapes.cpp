@@ -23,8 +23,6 @@ void orient(geometry::TetMesh& m) {
     if (signed_vol(m.vertices, t) < 0.0) std::swap(t[2], t[3]);
 }
 
-// Kuhn subdivision of a cube with corner ids c[bits] (bit 0 = x, 1 = y, 2 = z): 6 tets along
-// the diagonal 0 → 7, one per axis permutation.
 double parse_number(std::string_view text, std::string_view spec) {
   double v = 0.0;
   const auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
@@ -35,8 +33,6 @@ double parse_number(std::string_view text, std::string_view spec) {
 }
 
 }  // namespace
-
-geometry::TetMesh make_cube(double size_mm) { return make_block({size_mm, size_mm, size_mm}, size_mm); }
 
 geometry::TetMesh make_cube12(double size_mm) {
   if (!(size_mm > 0.0)) throw InvalidInput("cube12: size must be positive");
@@ -71,7 +67,7 @@ geometry::TetMesh make_block(const Vec3& size_mm, double cell_mm) {
 }
 
 geometry::TetMesh make_shape(std::string_view spec) {
-  if (spec == "cube") return make_cube(1.0);
+  if (spec == "cube") return make_block(Vec3::Ones(), 1.0);
   if (spec == "cube12") return make_cube12(1.0);
   if (spec.starts_with("block:")) {
     std::vector<double> v;

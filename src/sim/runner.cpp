@@ -11,69 +11,50 @@
 #include "ido/sim/world.h"
 
 namespace ido::sim {
-namespace {
 
-/// Watches a run for divergence (run()'s doc comment gives the rule).
-class DivergenceWatch {
- public:
-  DivergenceWatch(const World& world, const RunOptions& options) : m_world(world), m_options(options) {
-    const auto& p = world.particles();
-    m_start = p.positions();
-    m_coefficient_n.assign(p.size(), 0.0);
-    std::vector<Vec3> load(p.size(), Vec3::Zero());
-    for (const auto& l : world.external().point_loads)
-      if (l.particle >= 0 && static_cast<std::size_t>(l.particle) < p.size())
-        load[static_cast<std::size_t>(l.particle)] += l.force_n;
-    const double g = world.external().gravity_mm_s2.norm();
-    for (std::size_t i = 0; i < p.size(); ++i)
-      m_coefficient_n[i] = load[i].norm() + p.masses()[i] * g * kKgMmPerS2ToNewton;
-    const auto e = energies(world);
-    m_start_mj = e.kinetic_mj + e.elastic_total_mj();
-  }
+DivergenceWatch::DivergenceWatch(const World& world, double dt_s, double energy_floor_mj)
+    : m_dt_s(dt_s), m_floor_mj(energy_floor_mj) {
+  const auto& p = world.particles();
+  m_start = p.positions();
+  m_coefficient_n.assign(p.size(), 0.0);
+  std::vector<Vec3> load(p.size(), Vec3::Zero());
+  for (const auto& l : world.external().point_loads)
+    if (l.particle >= 0 && static_cast<std::size_t>(l.particle) < p.size())
+      load[static_cast<std::size_t>(l.particle)] += l.force_n;
+  const double g = world.external().gravity_mm_s2.norm();
+  for (std::size_t i = 0; i < p.size(); ++i)
+    m_coefficient_n[i] = load[i].norm() + p.masses()[i] * g * kKgMmPerS2ToNewton;
+  const auto e = energies(world);
+  m_start_mj = e.kinetic_mj + e.elastic_total_mj();
+}
 
-  /// After each step: every position and velocity finite.
-  void check_finite(std::int64_t step) const {
-    const auto& p = m_world.particles();
-    for (std::size_t i = 0; i < p.size(); ++i)
-      if (!p.positions()[i].allFinite() || !p.velocities()[i].allFinite())
-        fail(step, fmt::format("particle {} has a non-finite {}", i,
-                               p.positions()[i].allFinite() ? "velocity" : "position"));
-  }
+std::optional<std::string> DivergenceWatch::check_finite(const World& world) const {
+  const auto& p = world.particles();
+  for (std::size_t i = 0; i < p.size(); ++i)
+    if (!p.positions()[i].allFinite() || !p.velocities()[i].allFinite())
+      return fmt::format("particle {} has a non-finite {}", i, p.positions()[i].allFinite() ? "velocity" : "position");
+  return std::nullopt;
+}
 
-  /// Before a sample or frame: the energy within its bound.
-  void check_energy(std::int64_t step, const EnergyReport& e) const {
-    const double mech_mj = e.kinetic_mj + e.elastic_total_mj();
-    if (!std::isfinite(mech_mj) || !std::isfinite(e.gravitational_mj)) fail(step, "the energy is not finite");
-    const auto& p = m_world.particles();
-    double work_mj = 0.0;
-    for (std::size_t i = 0; i < m_start.size() && i < p.size(); ++i)
-      if (m_coefficient_n[i] > 0.0)
-        work_mj += m_coefficient_n[i] *
-                   ((p.positions()[i] - m_start[i]).norm() + p.velocities()[i].norm() * m_options.dt_s);
-    const double bound_mj = m_start_mj + work_mj + m_options.energy_floor_mj;
-    if (mech_mj > kDivergenceEnergyFactor * bound_mj)
-      fail(step, fmt::format("kinetic + elastic energy {:.3g} mJ is over {:g} times what the start state, loads and "
-                             "gravity can have given ({:.3g} mJ)",
-                             mech_mj, kDivergenceEnergyFactor, bound_mj));
-  }
+double DivergenceWatch::energy_bound_mj(const World& world) const {
+  const auto& p = world.particles();
+  double work_mj = 0.0;
+  for (std::size_t i = 0; i < m_start.size() && i < p.size(); ++i)
+    if (m_coefficient_n[i] > 0.0)
+      work_mj += m_coefficient_n[i] * ((p.positions()[i] - m_start[i]).norm() + p.velocities()[i].norm() * m_dt_s);
+  return m_start_mj + work_mj + m_floor_mj;
+}
 
- private:
-  [[noreturn]] void fail(std::int64_t step, const std::string& cause) const {
-    throw Diverged(fmt::format("{}: simulation diverged at step {} of {} (t = {:.6g} s): {}; reduce dt_s (now {:g}) "
-                               "or use implicit_euler",
-                               m_options.label.empty() ? std::string("scene") : m_options.label, step,
-                               m_options.steps, m_world.time_s(), cause, m_options.dt_s),
-                   step);
-  }
-
-  const World& m_world;
-  const RunOptions& m_options;
-  std::vector<Vec3> m_start;            ///< positions at the start (mm)
-  std::vector<double> m_coefficient_n;  ///< |Σ point loads| + m |g| per particle (N)
-  double m_start_mj = 0.0;
-};
-
-}  // namespace
+std::optional<std::string> DivergenceWatch::check_energy(const World& world, const EnergyReport& e) const {
+  const double mech_mj = e.kinetic_mj + e.elastic_total_mj();
+  if (!std::isfinite(mech_mj) || !std::isfinite(e.gravitational_mj)) return std::string("the energy is not finite");
+  const double bound_mj = energy_bound_mj(world);
+  if (mech_mj > kDivergenceEnergyFactor * bound_mj)
+    return fmt::format("kinetic + elastic energy {:.3g} mJ is over {:g} times what the start state, loads and "
+                       "gravity can have given ({:.3g} mJ)",
+                       mech_mj, kDivergenceEnergyFactor, bound_mj);
+  return std::nullopt;
+}
 
 RunResult run(World& world, const RunOptions& options, std::span<RunObserver* const> observers,
               Progress* progress) {
@@ -103,7 +84,16 @@ RunResult run(World& world, const RunOptions& options, std::span<RunObserver* co
     for (auto* o : observers) o->on_frame(world, index, step);
   };
 
-  const DivergenceWatch watch(world, options);
+  const DivergenceWatch watch(world, options.dt_s, options.energy_floor_mj);
+  // A state the watch refuses ends the run before anything of it is handed on.
+  auto stop_if = [&](std::int64_t step, const std::optional<std::string>& cause) {
+    if (!cause) return;
+    throw Diverged(fmt::format("{}: simulation diverged at step {} of {} (t = {:.6g} s): {}; reduce dt_s (now {:g}) "
+                               "or use implicit_euler",
+                               options.label.empty() ? std::string("scene") : options.label, step, options.steps,
+                               world.time_s(), *cause, options.dt_s),
+                   step);
+  };
   sample(0, energies(world));
   frame(0);
   const auto t_start = std::chrono::steady_clock::now();
@@ -115,14 +105,14 @@ RunResult run(World& world, const RunOptions& options, std::span<RunObserver* co
     const double ms = std::chrono::duration<double, std::milli>(t1 - t0).count();
     result.step_ms.push_back(ms);
     result.cg_iterations.push_back(world.last_step().cg_iterations);
-    watch.check_finite(s);
+    stop_if(s, watch.check_finite(world));
     for (auto* o : observers) o->on_step(world, s, ms);
     const bool sample_now = s % sample_every == 0 || s == options.steps;
     const bool frame_now = s % options.frame_every == 0 || s == options.steps;
     if (sample_now || frame_now) {
       // Checked before anything of this state is handed on: a diverged state reaches no file.
       const auto e = energies(world);
-      watch.check_energy(s, e);
+      stop_if(s, watch.check_energy(world, e));
       if (sample_now) sample(s, e);
       if (frame_now) frame(s);
     }

@@ -80,13 +80,13 @@ std::int32_t World::add_tet_body(const geometry::TetMesh& mesh, double density_k
                          (vol < 0.0 ? " is inverted (negative volume)" : " is degenerate (zero volume)"));
     for (auto i : t) mass[static_cast<std::size_t>(i)] += 0.25 * rho * vol;
   }
-  const auto first = static_cast<std::int32_t>(m_particles.size());
-  for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+  // Every check before the first particle is added: a refused body leaves the world as it was.
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
     if (!(mass[i] > 0.0))
       throw InvalidInput("tetrahedral body: vertex " + std::to_string(i) +
                          " belongs to no tetrahedron");
-    m_particles.add(mesh.vertices[i], mass[i]);
-  }
+  const auto first = static_cast<std::int32_t>(m_particles.size());
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i) m_particles.add(mesh.vertices[i], mass[i]);
   return first;
 }
 

@@ -2,17 +2,25 @@
 #include "ido/view/deform_session.h"
 
 #include <algorithm>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <deque>
 #include <fstream>
+#include <optional>
 #include <sstream>
+#include <string_view>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "ido/core/error.h"
 #include "ido/sim/diagnostics.h"
+#include "ido/sim/fem_common.h"
+#include "ido/sim/mass_spring.h"
+#include "ido/sim/mls.h"
+#include "ido/sim/runner.h"
+#include "ido/sim/shape_matching.h"
 
 namespace ido::view {
 namespace {
@@ -65,6 +73,105 @@ std::string read_text(const std::filesystem::path& path) {
   return text.str();
 }
 
+/// What a parameter changes in a running world: a number one of its objects can take in place
+/// (a force model's setter, the Rayleigh damping), or something built from it (the particles'
+/// masses from the density, shape-matching clusters, MLS neighbourhoods), which only a world
+/// built anew can change.
+enum class ParameterRole {
+  YoungsModulus, PoissonRatio, SpringStiffness, SpringDamping, MatchingStiffness, MatchingBeta,
+  MlsVolumeStiffness, DampingAlpha, DampingBeta, Rebuild
+};
+
+struct ParameterTarget {
+  ParameterRole role = ParameterRole::Rebuild;
+  std::size_t body = 0;
+};
+
+/// The target of a SceneParameter::pointer ("/bodies/0/material/youngs_modulus_pa",
+/// "/bodies/1/mass_spring/stiffness_n_per_mm", "/damping/rayleigh_mass_per_s", ...).
+ParameterTarget parameter_target(const std::string& pointer) {
+  static const std::pair<const char*, ParameterRole> kRoles[] = {
+      {"/material/youngs_modulus_pa", ParameterRole::YoungsModulus},
+      {"/material/poisson_ratio", ParameterRole::PoissonRatio},
+      {"/mass_spring/stiffness_n_per_mm", ParameterRole::SpringStiffness},
+      {"/mass_spring/damping_n_s_per_mm", ParameterRole::SpringDamping},
+      {"/shape_matching/stiffness_per_s2", ParameterRole::MatchingStiffness},
+      {"/shape_matching/beta", ParameterRole::MatchingBeta},
+      {"/mls/volume_stiffness_pa", ParameterRole::MlsVolumeStiffness}};
+  if (pointer == "/damping/rayleigh_mass_per_s") return {ParameterRole::DampingAlpha, 0};
+  if (pointer == "/damping/rayleigh_stiffness_s") return {ParameterRole::DampingBeta, 0};
+  constexpr std::string_view kBodies = "/bodies/";
+  if (!pointer.starts_with(kBodies)) return {};
+  std::size_t body = 0;
+  const std::size_t slash = pointer.find('/', kBodies.size());
+  if (slash == std::string::npos) return {};
+  const auto [end, ec] = std::from_chars(pointer.data() + kBodies.size(), pointer.data() + slash, body);
+  if (ec != std::errc() || end != pointer.data() + slash) return {};
+  const std::string_view rest = std::string_view(pointer).substr(slash);
+  for (const auto& [suffix, role] : kRoles)
+    if (rest == suffix) return {role, body};
+  return {};
+}
+
+/// Gives @p world the values of the changed parameters @p changed through its objects' setters
+/// (force models, damping), or returns false having changed nothing when one of them needs a
+/// world built anew. @p bodies are the scene's (their material is the stress output's).
+bool set_in_place(sim::World& world, std::vector<io::SceneBody>& bodies, const std::vector<SceneParameter>& parameters,
+                  const std::vector<std::size_t>& changed, const std::vector<double>& values) {
+  std::vector<ParameterTarget> targets;
+  for (std::size_t i : changed) {
+    const ParameterTarget t = parameter_target(parameters[i].pointer);
+    if (t.role == ParameterRole::Rebuild) return false;
+    if (t.role != ParameterRole::DampingAlpha && t.role != ParameterRole::DampingBeta) {
+      if (t.body >= bodies.size() || bodies[t.body].model_index >= world.models().size()) return false;
+      sim::ForceModel* model = world.models()[bodies[t.body].model_index].get();
+      const bool fits = [&] {
+        switch (t.role) {
+          case ParameterRole::SpringStiffness:
+          case ParameterRole::SpringDamping: return dynamic_cast<sim::MassSpring*>(model) != nullptr;
+          case ParameterRole::MatchingStiffness:
+          case ParameterRole::MatchingBeta: return dynamic_cast<sim::ShapeMatching*>(model) != nullptr;
+          case ParameterRole::MlsVolumeStiffness: return dynamic_cast<sim::MlsElasticity*>(model) != nullptr;
+          default: return true;  // a material: the model's own, or the stress output's only
+        }
+      }();
+      if (!fits) return false;
+    }
+    targets.push_back(t);
+  }
+  // The values were checked by the scene reader, whose ranges are those of the setters or
+  // narrower, so no setter below refuses one.
+  for (std::size_t k = 0; k < changed.size(); ++k) {
+    const double v = values[changed[k]];
+    const ParameterTarget& t = targets[k];
+    if (t.role == ParameterRole::DampingAlpha) {
+      world.external().damping.mass_per_s = v;
+      continue;
+    }
+    if (t.role == ParameterRole::DampingBeta) {
+      world.external().damping.stiffness_s = v;
+      continue;
+    }
+    io::SceneBody& body = bodies[t.body];
+    sim::ForceModel* model = world.models()[body.model_index].get();
+    switch (t.role) {
+      case ParameterRole::YoungsModulus:
+      case ParameterRole::PoissonRatio:
+        (t.role == ParameterRole::YoungsModulus ? body.material.youngs_modulus_pa : body.material.poisson_ratio) = v;
+        if (auto* fem = dynamic_cast<sim::TetFemModel*>(model)) fem->set_material(body.material);
+        if (auto* mls = dynamic_cast<sim::MlsElasticity*>(model)) mls->set_material(body.material);
+        break;
+      case ParameterRole::SpringStiffness: static_cast<sim::MassSpring*>(model)->set_stiffness(v); break;
+      case ParameterRole::SpringDamping: static_cast<sim::MassSpring*>(model)->set_damping(v); break;
+      case ParameterRole::MatchingStiffness: static_cast<sim::ShapeMatching*>(model)->set_stiffness(v); break;
+      case ParameterRole::MatchingBeta: static_cast<sim::ShapeMatching*>(model)->set_beta(v); break;
+      case ParameterRole::MlsVolumeStiffness: static_cast<sim::MlsElasticity*>(model)->set_volume_stiffness(v); break;
+      default: break;
+    }
+  }
+  return true;
+}
+
 }  // namespace
 
 DeformSession::DeformSession(io::Scene scene) : m_scene(std::move(scene)) {
@@ -96,7 +203,8 @@ bool DeformSession::apply_parameters(const std::vector<double>& values, std::vec
                                      std::vector<ParameterChange>& changes, std::string& error) {
   error.clear();
   if (values == in_use) return false;
-  // The scene file with the new values, read again by the library (which checks them).
+  // The scene file with the new values, read again by the library, which checks them: the one
+  // rule for what a scene takes, with its messages naming the JSON pointer.
   nlohmann::json doc = nlohmann::json::parse(m_scene_text);
   for (std::size_t i = 0; i < values.size(); ++i)
     if (values[i] != m_parameters[i].value) doc[nlohmann::json::json_pointer(m_parameters[i].pointer)] = values[i];
@@ -112,16 +220,22 @@ bool DeformSession::apply_parameters(const std::vector<double>& values, std::vec
     error = "the changed scene has other particles";
     return false;
   }
-  // The new world goes on from the old one's state.
-  fresh.world.particles().positions() = old.particles().positions();
-  fresh.world.particles().velocities() = old.particles().velocities();
-  fresh.world.set_integrator(old.integrator());
-  const std::int64_t step = m_step_base + old.step_count();
+  std::vector<std::size_t> changed;
   for (std::size_t i = 0; i < values.size(); ++i)
-    if (values[i] != in_use[i]) changes.push_back({step, m_parameters[i].pointer, values[i]});
-  m_step_base = step;
-  m_time_base_s += old.time_s();
-  m_scene = std::move(fresh);
+    if (values[i] != in_use[i]) changed.push_back(i);
+  const std::int64_t step = m_step_base + old.step_count();
+  // Numbers the running objects take through their setters change in place: positions,
+  // velocities, the integrator's state and the models' caches go on. Otherwise the new world
+  // goes on from the old one's particles and integrator.
+  if (!set_in_place(old, m_scene.bodies, m_parameters, changed, values)) {
+    fresh.world.particles().positions() = old.particles().positions();
+    fresh.world.particles().velocities() = old.particles().velocities();
+    fresh.world.set_integrator(old.integrator());
+    m_step_base = step;
+    m_time_base_s += old.time_s();
+    m_scene = std::move(fresh);
+  }
+  for (std::size_t i : changed) changes.push_back({step, m_parameters[i].pointer, values[i]});
   in_use = values;
   return true;
 }
@@ -193,12 +307,27 @@ void DeformSession::work() {
     s->parameter_error = parameter_error;
     m_states.write(std::shared_ptr<const DeformState>(std::move(s)));
   };
-  auto sample = [&](double step_ms) {
-    const sim::EnergyReport e = sim::energies(world);
+  // The project's divergence rule (sim::DivergenceWatch, as sim::run applies it) with the
+  // scene's energy floor (io::run_options). It starts again from the present state whenever the
+  // world's loads or models change between steps: a parameter change, and every step the pull
+  // acts or has just been let go of (the pull is a load that changes each step).
+  std::optional<sim::DivergenceWatch> watch;
+  std::vector<sim::PointLoad> watched_loads;
+  auto watch_from_here = [&] {
+    watch.emplace(world, m_dt_s, io::run_options(m_scene).energy_floor_mj);
+    watched_loads = world.external().point_loads;
+  };
+  auto same_loads = [](const std::vector<sim::PointLoad>& a, const std::vector<sim::PointLoad>& b) {
+    return std::equal(a.begin(), a.end(), b.begin(), b.end(), [](const sim::PointLoad& x, const sim::PointLoad& y) {
+      return x.particle == y.particle && x.force_n == y.force_n;
+    });
+  };
+  auto sample = [&](double step_ms, const sim::EnergyReport& e) {
     history.push_back({m_time_base_s + world.time_s(), e.kinetic_mj, e.elastic_total_mj(), e.total_mj(), step_ms});
     if (history.size() > DeformState::kHistory) history.pop_front();
   };
-  sample(0.0);
+  sample(0.0, sim::energies(world));
+  watch_from_here();
   publish();
   bool unpublished = false;  // steps taken since the last state handed over
   while (!m_stop) {
@@ -208,7 +337,10 @@ void DeformSession::work() {
     if (m_parameter_requests.has_new()) {
       const std::shared_ptr<const std::vector<double>> wanted = m_parameter_requests.read();
       if (wanted && !m_scene_text.empty()) {
-        if (apply_parameters(*wanted, in_use, changes, parameter_error)) base_loads = world.external().point_loads;
+        if (apply_parameters(*wanted, in_use, changes, parameter_error)) {
+          base_loads = world.external().point_loads;
+          watch_from_here();
+        }
         publish();
         unpublished = false;
       }
@@ -245,6 +377,7 @@ void DeformSession::work() {
           world.external().point_loads.push_back({i, m[std::size_t(i)] / mass * grab_k * (g.target_mm - centre)});
       }
     }
+    if (!same_loads(world.external().point_loads, watched_loads)) watch_from_here();
     const auto t0 = std::chrono::steady_clock::now();
     try {
       world.step(m_dt_s);
@@ -252,12 +385,16 @@ void DeformSession::work() {
       error = e.what();
     }
     const double step_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    for (const Vec3& p : world.particles().positions())
-      if (!p.allFinite() || p.cwiseAbs().maxCoeff() > 1e7) {
-        error = "the simulation diverged (a position is not finite): reduce dt_s or use implicit_euler";
-        break;
-      }
-    sample(step_ms);
+    const sim::EnergyReport energy = sim::energies(world);
+    if (error.empty()) {
+      std::optional<std::string> cause = watch->check_finite(world);
+      if (!cause) cause = watch->check_energy(world, energy);
+      if (cause)
+        error = fmt::format("simulation diverged at step {} (t = {:.6g} s): {}; reduce dt_s (now {:g}) or use "
+                            "implicit_euler",
+                            m_step_base + world.step_count(), m_time_base_s + world.time_s(), *cause, m_dt_s);
+    }
+    sample(step_ms, energy);
     if (requested) m_step_requests.fetch_sub(1);
     unpublished = true;
     if (!m_states.has_new() || requested || !error.empty()) {

@@ -508,7 +508,7 @@ TEST(TetHierarchy, ChangesOnHeldPathWordsEqualChangesFromTheRoot) {
 }
 
 TEST(TetHierarchy, LeafVolumesSumToRootAfterDeepRefinement) {
-  TetHierarchy h(make_cube(2.0));
+  TetHierarchy h(make_block({2, 2, 2}, 2.0));
   std::mt19937 rng(5);
   for (int i = 0; i < 400; ++i) {
     const Vec3 p(2.0 * std::uniform_real_distribution<double>(0, 1)(rng), 2.0 * std::uniform_real_distribution<double>(0, 1)(rng),

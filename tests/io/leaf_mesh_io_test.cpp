@@ -1,4 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
+// The leaf mesh streamed to files: .vtu, .msh and the boundary .vtp are the held mesh's files
+// byte for byte, and read back they fill (or enclose) exactly the material left.
 #include "ido/io/leaf_mesh_io.h"
 
 #include <algorithm>
@@ -8,10 +10,9 @@
 
 #include "ido/drill/assembled_surface.h"
 #include "ido/drill/boundary_surface.h"
-#include "ido/drill/erosion.h"
 #include "ido/drill/leaf_mesh.h"
-#include "ido/drill/shapes.h"
 #include "ido/io/mesh_io.h"
+#include "support/drilled_block.h"
 #include "support/test_support.h"
 
 namespace ido {
@@ -22,22 +23,10 @@ std::string file_bytes(const std::filesystem::path& p) {
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-// A block drilled at three levels of refinement: a burr through a corner and one inside,
-// and a whole root erased, so leaves of several depths, erased cells and points on the
-// roots' faces, edges and corners (shared between roots) all occur.
-drill::TetHierarchy drilled_block() {
-  drill::TetHierarchy h(drill::make_block({6, 6, 4}, 2.0));
-  drill::Eroder e({.removal_rate_mm3_per_s = 0.0, .max_depth = 3, .max_node_visits = 0});
-  for (const Vec3& c : {Vec3(0.3, 0.4, 4.1), Vec3(3.1, 2.9, 2.2), Vec3(5.0, 5.5, 1.0)})
-    e.erode(h, c, 1.1, 1.0, 1e-3);
-  h.erase(drill::NodeRef{7, 0, 0});
-  return h;
-}
-
 // The streamed .vtu is the held mesh's file byte for byte (binary and ASCII), and its
 // tetrahedra are positively oriented and fill exactly the remaining material.
 TEST(LeafMeshIo, StreamedVtuEqualsTheHeldMeshFile) {
-  const auto h = drilled_block();
+  const auto h = test::drilled_block();
   ASSERT_LT(h.material_volume(), h.total_volume() - h.root_volume(7) + 1e-9);
   const auto dir = test::scratch_dir("leaf-mesh-io");
   const auto held = drill::full_leaf_mesh(h);
@@ -70,7 +59,7 @@ TEST(LeafMeshIo, StreamedVtuEqualsTheHeldMeshFile) {
 
 // Other formats build the mesh: the same files as write_tet_mesh of full_leaf_mesh.
 TEST(LeafMeshIo, GmshEqualsTheHeldMeshFile) {
-  const auto h = drilled_block();
+  const auto h = test::drilled_block();
   const auto dir = test::scratch_dir("leaf-mesh-io-msh");
   io::write_leaf_mesh(dir / "streamed.msh", h);
   io::write_tet_mesh(dir / "held.msh", drill::full_leaf_mesh(h));
@@ -80,7 +69,7 @@ TEST(LeafMeshIo, GmshEqualsTheHeldMeshFile) {
 // The drilled surface streamed as a .vtp is write_triangle_mesh's file of the same surface
 // made into a TriangleMesh, byte for byte (binary and ASCII); other formats build the mesh.
 TEST(LeafMeshIo, StreamedSurfaceVtpEqualsTheHeldMeshFile) {
-  const auto h = drilled_block();
+  const auto h = test::drilled_block();
   const auto dir = test::scratch_dir("leaf-mesh-io-vtp");
   const drill::BoundarySurface surface(h);
   const drill::AssembledSurface assembled(surface.v_lists(), h.vertices());
@@ -104,25 +93,6 @@ TEST(LeafMeshIo, StreamedSurfaceVtpEqualsTheHeldMeshFile) {
   for (const auto& t : back.triangles)
     volume += back.vertices[std::size_t(t[0])].dot(back.vertices[std::size_t(t[1])].cross(back.vertices[std::size_t(t[2])])) / 6.0;
   EXPECT_TRUE(test::rel_near(volume, h.material_volume(), 1e-9));
-}
-
-// Welding: every vertex is used, and no two vertices share a position.
-TEST(LeafMeshWalk, VerticesAreWeldedAndUsed) {
-  const auto h = drilled_block();
-  const drill::LeafMeshWalk walk(h);
-  std::vector<std::array<double, 3>> points;
-  walk.for_each_vertex([&](const Vec3& p) { points.push_back({p.x(), p.y(), p.z()}); });
-  ASSERT_EQ(points.size(), walk.vertex_count());
-  std::vector<int> used(points.size(), 0);
-  std::size_t tets = 0;
-  walk.for_each_tet([&](const Tet& t) {
-    ++tets;
-    for (const auto v : t) used.at(std::size_t(v)) = 1;
-  });
-  EXPECT_EQ(tets, walk.tet_count());
-  EXPECT_EQ(std::count(used.begin(), used.end(), 0), 0);
-  std::sort(points.begin(), points.end());
-  EXPECT_EQ(std::adjacent_find(points.begin(), points.end()), points.end());
 }
 
 }  // namespace

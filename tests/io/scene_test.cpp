@@ -14,31 +14,13 @@
 
 #include "ido/core/error.h"
 #include "ido/io/mesh_io.h"
+#include "support/clamped_cube_scene.h"
 #include "support/test_support.h"
 
 namespace ido {
 namespace {
 
 namespace fs = std::filesystem;
-
-/// A 10-mm cube clamped at its base, sagging under gravity (stiffness damping), stepped with
-/// @p integrator at @p dt_s.
-std::string clamped_cube(const std::string& integrator, double dt_s, int steps, int output_every) {
-  nlohmann::json scene = nlohmann::json::parse(R"({
-    "gravity_mm_s2": [0, 0, -9806.65],
-    "damping": {"rayleigh_stiffness_s": 0.002},
-    "bodies": [{
-      "mesh": {"generator": "cube", "edge_mm": 10, "cells": 2},
-      "model": "corotational_fem",
-      "material": {"youngs_modulus_pa": 1e4, "poisson_ratio": 0.3, "density_kg_m3": 1000},
-      "fixed": [{"box_min_mm": [-6, -6, -6], "box_max_mm": [6, 6, -4.9]}]
-    }]})");
-  scene["integrator"] = integrator;
-  scene["dt_s"] = dt_s;
-  scene["steps"] = steps;
-  scene["output_every"] = output_every;
-  return scene.dump();
-}
 
 /// Counts the frames an observer sees.
 struct FrameCounter final : sim::RunObserver {
@@ -50,7 +32,7 @@ struct FrameCounter final : sim::RunObserver {
 // last bit: VTU stores float64), an extra observer sees every frame, and scene_report() gives
 // the report.json the run wrote.
 TEST(SceneRun, FilesHoldTheFramesHandedOverInMemory) {
-  auto scene = io::parse_scene(clamped_cube("implicit_euler", 0.01, 20, 5), "cube.json", ".");
+  auto scene = io::parse_scene(test::clamped_cube_scene("implicit_euler", 0.01, 20, 5).dump(), "cube.json", ".");
   const auto out = test::scratch_dir("scene_run_frames");
   std::vector<geometry::TetMesh> frames;
   FrameCounter counter;
@@ -85,7 +67,7 @@ TEST(SceneRun, FilesHoldTheFramesHandedOverInMemory) {
 
 // The divergence floor is the energy that strains the body by 0.1 %: ½ E ε² V.
 TEST(SceneRun, RunOptionsCarryTheSceneAndTheFloor) {
-  const auto scene = io::parse_scene(clamped_cube("explicit_euler", 0.001, 40, 10), "cube.json", ".");
+  const auto scene = io::parse_scene(test::clamped_cube_scene("explicit_euler", 0.001, 40, 10).dump(), "cube.json", ".");
   const auto o = io::run_options(scene);
   EXPECT_EQ(o.steps, 40);
   EXPECT_EQ(o.frame_every, 10);
@@ -100,7 +82,7 @@ TEST(SceneRun, RunOptionsCarryTheSceneAndTheFloor) {
 TEST(SceneRun, DivergingRunLeavesNoFile) {
   for (const bool folder_existed : {false, true}) {
     SCOPED_TRACE(folder_existed);
-    auto scene = io::parse_scene(clamped_cube("explicit_euler", 0.01, 4000, 1), "cube.json", ".");
+    auto scene = io::parse_scene(test::clamped_cube_scene("explicit_euler", 0.01, 4000, 1).dump(), "cube.json", ".");
     const auto dir = test::scratch_dir(folder_existed ? "scene_diverging_existing" : "scene_diverging_new");
     const auto out = dir / "out";
     if (folder_existed) fs::create_directories(out);

@@ -222,6 +222,30 @@ TEST(RealDataSection, VmtkAortaWithinTheReferenceSection) {
   EXPECT_LE(s.hd95_mm, 2.0 * o.voxel_mm);
 }
 
+/// The abdomen-spine scan of ../shared/data and its vertebra labels (TotalSegmentator:
+/// 31 = L1 … 27 = L5).
+struct Spine {
+  image::Volume<float> ct, labels;
+};
+Spine load_spine() {
+  const auto dir = *test::shared_data_dir();
+  return {io::read_volume(dir / "abdomen-spine/ct.nii.gz"), io::read_volume(dir / "abdomen-spine/vertebrae.nii.gz")};
+}
+
+/// A vertebra's label and its seed voxel: L1, L3, L5 from the data README, L2 and L4 the
+/// deepest voxel of their labels.
+struct VertebraSeed {
+  int label;
+  Index3 voxel;
+};
+constexpr VertebraSeed kL1{31, {56, 36, 97}}, kL2{30, {57, 41, 86}}, kL3{29, {58, 45, 74}}, kL4{28, {56, 46, 61}},
+    kL5{27, {57, 41, 49}};
+
+/// The seed voxel's centre (world mm).
+Vec3 seed_mm(const image::Volume<float>& ct, const VertebraSeed& sd) {
+  return ct.index_to_world(Vec3(double(sd.voxel[0]), double(sd.voxel[1]), double(sd.voxel[2])));
+}
+
 // abdomen-spine, one seed per vertebra and `--organ vertebra` only (issue 27): the balloon used
 // to take the whole spine and pelvis from any of them (26x L3's volume). Asserted: no case ends
 // with more than 1.5x its reference's volume, and what it takes of other vertebrae stays under a
@@ -230,14 +254,11 @@ TEST(RealDataSection, VmtkAortaWithinTheReferenceSection) {
 // 0.90: docs/segmentation.md says where it falls short).
 TEST(RealDataSpine, EachVertebraFromItsSeedAlone) {
   IDO_REQUIRE_SHARED_DATA();
-  const auto dir = *test::shared_data_dir();
-  const image::Volume<float> ct = io::read_volume(dir / "abdomen-spine/ct.nii.gz");
-  const image::Volume<float> labels = io::read_volume(dir / "abdomen-spine/vertebrae.nii.gz");
-  struct Seed { int label; Index3 voxel; };
-  // L1, L3, L5 from the data README; L2 and L4 the deepest voxel of their labels.
-  for (const Seed& sd : {Seed{31, {56, 36, 97}}, Seed{30, {57, 41, 86}}, Seed{29, {58, 45, 74}}, Seed{28, {56, 46, 61}},
-                         Seed{27, {57, 41, 49}}}) {
-    const Vec3 seed = ct.index_to_world(Vec3(double(sd.voxel[0]), double(sd.voxel[1]), double(sd.voxel[2])));
+  const Spine spine = load_spine();
+  const image::Volume<float>& ct = spine.ct;
+  const image::Volume<float>& labels = spine.labels;
+  for (const VertebraSeed& sd : {kL1, kL2, kL3, kL4, kL5}) {
+    const Vec3 seed = seed_mm(ct, sd);
     const BalloonResult r = segment_balloon(ct, {seed}, organ_options(Organ::Vertebra));
     const auto mask = surface_to_mask(r.surface, ct);
     auto truth = mask.like<std::uint8_t>(0);
@@ -268,14 +289,13 @@ TEST(RealDataSpine, EachVertebraFromItsSeedAlone) {
 // within 0.05 of the voxel seed's.
 TEST(RealDataSpine, SeedsHalfAVoxelOffKeepTheirVertebra) {
   IDO_REQUIRE_SHARED_DATA();
-  const auto dir = *test::shared_data_dir();
-  const image::Volume<float> ct = io::read_volume(dir / "abdomen-spine/ct.nii.gz");
-  const image::Volume<float> labels = io::read_volume(dir / "abdomen-spine/vertebrae.nii.gz");
-  struct Seed { int label; Index3 voxel; };
-  for (const Seed& sd : {Seed{31, {56, 36, 97}}, Seed{28, {56, 46, 61}}, Seed{27, {57, 41, 49}}}) {
+  const Spine spine = load_spine();
+  const image::Volume<float>& ct = spine.ct;
+  const image::Volume<float>& labels = spine.labels;
+  for (const VertebraSeed& sd : {kL1, kL4, kL5}) {
     auto truth = ct.like<std::uint8_t>(0);
     for (std::size_t i = 0; i < truth.data().size(); ++i) truth.data()[i] = std::lround(labels.data()[i]) == sd.label;
-    const Vec3 centre = ct.index_to_world(Vec3(double(sd.voxel[0]), double(sd.voxel[1]), double(sd.voxel[2])));
+    const Vec3 centre = seed_mm(ct, sd);
     auto dice_from = [&](const Vec3& seed) {
       const BalloonResult r = segment_balloon(ct, {seed}, organ_options(Organ::Vertebra));
       return compare_masks(surface_to_mask(r.surface, ct), truth).dice;

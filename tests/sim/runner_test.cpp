@@ -1,8 +1,10 @@
 // SPDX-License-Identifier: Apache-2.0
 // sim::run, the stepping driver: what its observers see and when, integrators switched
-// mid-run, and a diverging run stopped before any bad state reaches an observer.
+// mid-run, and a diverging run stopped before any bad state reaches an observer; the
+// divergence rule (DivergenceWatch) on its own.
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -169,6 +171,51 @@ TEST(Runner, StableExplicitRunIsNotCalledDiverged) {
   const auto r = sim::run(w, {.dt_s = 0.0002, .steps = 4000, .frame_every = 100, .energy_floor_mj = 5e-6});
   EXPECT_EQ(r.frames, 41);
   EXPECT_LT(r.final_energy.kinetic_mj, 1e-9);
+}
+
+// The divergence rule on its own (sim::DivergenceWatch, the one run() and the viewer's Deform
+// session apply). The clamped cube stepped stably is not diverged; a NaN position or velocity is
+// reported naming the particle; the energy bound is the documented one — the start energy plus
+// Σ (|loads| + m |g|)(|x − x⁰| + |v| dt) plus the floor — and an energy just over 10 times it is
+// reported while one just under is not; a non-finite energy is reported.
+TEST(DivergenceWatch, ReportsNonFiniteStatesAndEnergyOverTheBoundOnly) {
+  auto w = clamped_cube();
+  const double dt = 0.0002, floor_mj = 5e-6;
+  w.external().point_loads.push_back({std::int32_t(w.particles().size() - 1), Vec3(0, 0.002, 0)});
+  const std::vector<Vec3> x0 = w.particles().positions();
+  const sim::DivergenceWatch watch(w, dt, floor_mj);
+  for (int s = 0; s < 100; ++s) w.step(dt);
+  ASSERT_GT((w.particles().positions().back() - x0.back()).norm(), 0.0) << "the cube moved";
+  EXPECT_FALSE(watch.check_finite(w));
+  const sim::EnergyReport e = sim::energies(w);
+  EXPECT_FALSE(watch.check_energy(w, e)) << *watch.check_energy(w, e);
+
+  // The bound, from its definition (the start state was at rest: no start energy).
+  const auto& p = w.particles();
+  double bound_mj = floor_mj;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const double load_n = i + 1 == p.size() ? 0.002 : 0.0;
+    const double coefficient_n = load_n + p.masses()[i] * sim::kStandardGravityMmPerS2 * sim::kKgMmPerS2ToNewton;
+    bound_mj += coefficient_n * ((p.positions()[i] - x0[i]).norm() + p.velocities()[i].norm() * dt);
+  }
+  EXPECT_TRUE(test::rel_near(watch.energy_bound_mj(w), bound_mj, 1e-12));
+  sim::EnergyReport over = e, under = e;
+  over.kinetic_mj = 10.0 * bound_mj * (1.0 + 1e-6) - e.elastic_total_mj();
+  under.kinetic_mj = 10.0 * bound_mj * (1.0 - 1e-6) - e.elastic_total_mj();
+  const auto cause = watch.check_energy(w, over);
+  ASSERT_TRUE(cause);
+  EXPECT_NE(cause->find("kinetic + elastic energy"), std::string::npos) << *cause;
+  EXPECT_NE(cause->find("over 10 times"), std::string::npos) << *cause;
+  EXPECT_FALSE(watch.check_energy(w, under));
+  sim::EnergyReport nan = e;
+  nan.kinetic_mj = std::nan("");
+  EXPECT_EQ(watch.check_energy(w, nan), std::optional<std::string>("the energy is not finite"));
+
+  w.particles().positions()[5].y() = std::nan("");
+  EXPECT_EQ(watch.check_finite(w), std::optional<std::string>("particle 5 has a non-finite position"));
+  w.particles().positions()[5].y() = x0[5].y();
+  w.particles().velocities()[7].z() = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(watch.check_finite(w), std::optional<std::string>("particle 7 has a non-finite velocity"));
 }
 
 TEST(Runner, BadOptionsAreRejectedByName) {

@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "support/clamped_cube_scene.h"
 #include "support/test_support.h"
 
 namespace ido {
@@ -182,20 +183,7 @@ TEST(SimulateCli, MalformedJsonIsAnIoError) {
 // exits 2 with one line naming the scene, the step and the cause, and leaves nothing: no
 // frame 0, no .pvd, no output folder. Just below it (0.2 ms) every output is written.
 TEST(SimulateCli, DivergingRunStopsBeforeWritingAndSaysWhere) {
-  auto scene_at = [](double dt_s) {
-    json scene = json::parse(R"({
-      "steps": 4000, "output_every": 100, "integrator": "explicit_euler",
-      "gravity_mm_s2": [0, 0, -9806.65],
-      "damping": {"rayleigh_stiffness_s": 0.002},
-      "bodies": [{
-        "mesh": {"generator": "cube", "edge_mm": 10, "cells": 2},
-        "model": "corotational_fem",
-        "material": {"youngs_modulus_pa": 1e4, "poisson_ratio": 0.3, "density_kg_m3": 1000},
-        "fixed": [{"box_min_mm": [-6, -6, -6], "box_max_mm": [6, 6, -4.9]}]
-      }]})");
-    scene["dt_s"] = dt_s;
-    return scene;
-  };
+  auto scene_at = [](double dt_s) { return test::clamped_cube_scene("explicit_euler", dt_s, 4000, 100); };
   for (const double dt_s : {0.01, 0.00022}) {
     SCOPED_TRACE(dt_s);
     const auto dir = test::scratch_dir("simulate_diverging_" + std::to_string(dt_s));

@@ -8,9 +8,6 @@
 
 namespace ido::drill {
 
-/// The unit cube [0, size]³ as 6 tetrahedra around its main diagonal (Kuhn subdivision).
-[[nodiscard]] geometry::TetMesh make_cube(double size_mm = 1.0);
-
 /// The cube [0, size]³ as 12 tetrahedra: each face split into 2 triangles joined to the
 /// centre (the paper's test cube).
 [[nodiscard]] geometry::TetMesh make_cube12(double size_mm = 1.0);
@@ -21,7 +18,9 @@ namespace ido::drill {
 [[nodiscard]] geometry::TetMesh make_block(const Vec3& size_mm, double cell_mm);
 
 /// Parses "cube", "cube12" or "block:SX,SY,SZ[,CELL]" (mm; CELL defaults to the smallest
-/// side / 4) and builds that mesh. @throws ido::InvalidInput naming the text.
+/// side / 4) and builds that mesh: "cube" is the unit cube [0, 1]³ as one cell of 6 Kuhn
+/// tetrahedra (make_block({1, 1, 1}, 1)), "cube12" is make_cube12(1).
+/// @throws ido::InvalidInput naming the text.
 [[nodiscard]] geometry::TetMesh make_shape(std::string_view spec);
 
 }  // namespace ido::drill

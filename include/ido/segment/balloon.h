@@ -96,8 +96,8 @@ struct BalloonOptions {
   /// (× h) and whose normal turned less than edge_reuse_turn_deg since its last search keeps
   /// the wall point found then (read along its present normal), for at most edge_reuse_steps
   /// steps in a row; a vertex still travelling to its wall is searched every step. 0 = search
-  /// every vertex every step. Measured (bench/results/segment.md, 2026-12-02):
-  /// about half the searches skipped, phantom Dice within ±0.0015.
+  /// every vertex every step. Measured against 0 (BalloonReport::edge_profile_searches and
+  /// edge_profile_reuses): about half the searches skipped, phantom Dice within ±0.0015.
   double edge_reuse_move_voxels = 0.15;
   double edge_reuse_turn_deg = 3.0;  ///< see edge_reuse_move_voxels (degrees)
   int edge_reuse_steps = 4;          ///< see edge_reuse_move_voxels

@@ -2,11 +2,13 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
 
 #include "ido/core/error.h"
+#include "ido/core/math.h"
 #include "ido/core/progress.h"
 #include "ido/sim/diagnostics.h"
 
@@ -70,6 +72,41 @@ class RunObserver {
   virtual void on_finish(const World& world, const RunResult& result) { (void)world, (void)result; }
 };
 
+/// The project's rule for when a simulation has diverged, applied by run() and by any loop that
+/// steps a world itself (the viewer's Deform workspace). A state has diverged when
+/// - a position or velocity is not finite (check_finite(), after every step), or
+/// - its kinetic + elastic energy is not finite or exceeds kDivergenceEnergyFactor times an upper
+///   bound of what the world can have received since the watch's start (check_energy(), before
+///   a state is handed on): the start energy, plus Σ (|loads on i| + m_i |g|)·(|x_i − x_i⁰| +
+///   |v_i| dt) for the work of the point loads and gravity acting at the start, plus an energy
+///   floor, so that rounding noise of a body at rest is not divergence.
+/// A stable integrator keeps to the energy balance (explicit schemes gain a little), so only a
+/// state that grows without bound fails. A caller that changes the world's loads or models
+/// between steps starts a new watch from the changed state.
+class DivergenceWatch {
+ public:
+  /// Takes @p world's present state as the start: positions, the point loads and gravity, and
+  /// the kinetic + elastic energy. @p dt_s is the step (s), @p energy_floor_mj ≥ 0 the floor
+  /// (mJ, RunOptions::energy_floor_mj).
+  DivergenceWatch(const World& world, double dt_s, double energy_floor_mj = 0.0);
+  /// Why @p world's state has diverged by its positions and velocities ("particle 12 has a
+  /// non-finite velocity"), or nothing.
+  [[nodiscard]] std::optional<std::string> check_finite(const World& world) const;
+  /// Why @p world's state has diverged by its energy @p energy (energies(world)), e.g.
+  /// "kinetic + elastic energy 5.11e+05 mJ is over 10 times what the start state, loads and
+  /// gravity can have given (60.7 mJ)", or nothing.
+  [[nodiscard]] std::optional<std::string> check_energy(const World& world, const EnergyReport& energy) const;
+  /// The bound (mJ) the kinetic + elastic energy of @p world's present state is held to.
+  [[nodiscard]] double energy_bound_mj(const World& world) const;
+
+ private:
+  std::vector<Vec3> m_start;            ///< positions at the start (mm)
+  std::vector<double> m_coefficient_n;  ///< |Σ point loads| + m |g| per particle (N)
+  double m_start_mj = 0.0;
+  double m_dt_s = 0.0;
+  double m_floor_mj = 0.0;
+};
+
 /// A run that diverged (run()): an InvalidInput naming the step.
 class Diverged : public InvalidInput {
  public:
@@ -87,13 +124,9 @@ class Diverged : public InvalidInput {
 /// then on_sample and on_frame when due; at the end on_finish. The library's convenience loop:
 /// World::step() remains the one-step call for callers who own their loop.
 ///
-/// A diverging run stops before its bad state reaches an observer: after every step the
-/// positions and velocities must be finite, and before every sample and frame the world's
-/// kinetic + elastic energy must stay within kDivergenceEnergyFactor times an upper bound of
-/// what the run can have received: the start energy, plus Σ (|loads on i| + m_i |g|)·(|x_i −
-/// x_i⁰| + |v_i| dt) for the work of point loads and gravity, plus options.energy_floor_mj.
-/// A stable integrator keeps to the energy balance (explicit schemes gain a little), so only a
-/// run whose state grows without bound is stopped.
+/// A diverging run stops before its bad state reaches an observer: a DivergenceWatch started
+/// with the world's state at the call (floor options.energy_floor_mj) checks the positions and
+/// velocities after every step and the energy before every sample and frame.
 /// @throws Diverged "<label>: simulation diverged at step N of M (t = … s): <cause>; reduce
 /// dt_s (now …) or use implicit_euler"; ido::Cancelled through @p progress; ido::InvalidInput
 /// for bad options; whatever an observer or the integrator throws.

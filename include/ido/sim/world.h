@@ -44,7 +44,8 @@ class World {
   /// Adds one particle per mesh vertex with lumped masses (each tetrahedron gives a quarter
   /// of its mass, density × volume, to each vertex) and returns the index of the first.
   /// @p density_kg_m3 > 0. @throws ido::InvalidInput for an empty mesh, bad indices or an
-  /// inverted / degenerate tetrahedron (naming it), or a vertex no tetrahedron uses.
+  /// inverted / degenerate tetrahedron (naming it), or a vertex no tetrahedron uses; the world
+  /// is unchanged then.
   std::int32_t add_tet_body(const geometry::TetMesh& mesh, double density_kg_m3);
 
   /// Adds a force model (the world owns it) and returns a reference to it.

@@ -77,6 +77,9 @@ struct GrabSpring {
 /// shows it. Run, pause, single steps, the integrator (switched between steps) and a grab
 /// spring (a point load recomputed before each step) are set by the render thread through
 /// atomics and triple buffers; states come back through a triple buffer. No lock either way.
+/// A run stops (DeformState::error) when a state fails the project's divergence rule
+/// (sim::DivergenceWatch with the scene's energy floor, io::run_options), the watch starting
+/// again from the present state whenever the loads or the parameters change between steps.
 class DeformSession {
  public:
   /// Takes the scene over; its parameters cannot be changed (parameters() is empty).
@@ -99,12 +102,18 @@ class DeformSession {
   /// The scene's changeable parameters (empty for a session made from an io::Scene).
   [[nodiscard]] const std::vector<SceneParameter>& parameters() const { return m_parameters; }
   /// Asks for @p values (one per parameters(), in order) from the next step on. The worker
-  /// applies them between two steps (at once while paused) through the library: the scene file
-  /// with these values is read again by io::parse_scene — which checks them, naming the JSON
-  /// pointer of a bad one (DeformState::parameter_error; the run goes on unchanged) — and its
-  /// world takes over the particles' positions and velocities, the integrator and the step
-  /// count and time. So a run continued this way is a library run with the new values from that
-  /// step on (the integrator's warm start and the models' cached rotations start afresh).
+  /// applies them between two steps (at once while paused) through the library. The scene file
+  /// with these values is read again by io::parse_scene, which checks them, naming the JSON
+  /// pointer of a bad one (DeformState::parameter_error; the run goes on unchanged). A number
+  /// the running world's objects take in place is given to them: Young's modulus and Poisson
+  /// ratio (TetFemModel::set_material, MlsElasticity::set_material), the spring stiffness and
+  /// damping (MassSpring), the shape-matching stiffness and β, the MLS volume stiffness and the
+  /// Rayleigh damping; positions, velocities, the integrator's state (e.g. implicit Euler's warm
+  /// start) and the models' caches (corotational rotations) go on, so the run is a library run
+  /// that calls those setters at that step. A number the world is built from (a density: the
+  /// particles' masses; a shape-matching cluster size; an MLS support radius) makes the read
+  /// scene's world take over instead, with the particles' positions and velocities, the
+  /// integrator and the step count and time (its integrator state and caches start afresh).
   /// @throws ido::InvalidInput for a wrong number of values.
   void set_parameters(const std::vector<double>& values);
   [[nodiscard]] const std::vector<std::string>& integrators() const { return m_integrator_names; }
@@ -120,7 +129,7 @@ class DeformSession {
   void work();
   [[nodiscard]] std::vector<std::int32_t> grab_group(std::int32_t particle) const;
 
-  /// Worker: replaces the world when @p values differ from @p in_use (true when it did).
+  /// Worker: gives the world @p values where they differ from @p in_use (true when it did).
   bool apply_parameters(const std::vector<double>& values, std::vector<double>& in_use,
                         std::vector<ParameterChange>& changes, std::string& error);
 

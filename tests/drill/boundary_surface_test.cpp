@@ -1,6 +1,10 @@
 // SPDX-License-Identifier: Apache-2.0
-// Boundary-surface properties: the v_lists, their assembly into a closed surface. Tool,
-// collision, force and erosion have their own test files.
+// The boundary surface: face records keyed by their points, an intact block's surface is its
+// box, and after random drilling the v_lists equal a point-location reference and assemble into
+// a closed 2-manifold enclosing the leaf volume. Worker threads rebuilding the lists are tested
+// in threads_test (label threads).
+#include "ido/drill/boundary_surface.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -12,7 +16,6 @@
 #include <gtest/gtest.h>
 
 #include "ido/core/error.h"
-#include "ido/drill/boundary_surface.h"
 #include "ido/drill/erosion.h"
 #include "ido/drill/shapes.h"
 #include "ido/drill/tet_hierarchy.h"
