@@ -265,7 +265,6 @@ class Workbench {
   // actions
   void place_mark(MarkKind kind, const Index3& voxel);
   [[nodiscard]] segment::BalloonChoices balloon_choices() const;
-  [[nodiscard]] geometry::Aabb index_box(const geometry::Aabb& world_mm) const;
   [[nodiscard]] geometry::Aabb roi_of_drag() const;
   void set_roi(std::optional<geometry::Aabb> roi_mm);
   void roi_panel();
@@ -1139,14 +1138,6 @@ segment::BalloonChoices Workbench::balloon_choices() const {
   return choices;
 }
 
-geometry::Aabb Workbench::index_box(const geometry::Aabb& world_mm) const {
-  geometry::Aabb box;  // continuous voxel indices of the box's corners
-  for (int c = 0; c < 8; ++c)
-    box.extend(m_ct->world_to_index(Vec3((c & 1) ? world_mm.max.x() : world_mm.min.x(), (c & 2) ? world_mm.max.y() : world_mm.min.y(),
-                                         (c & 4) ? world_mm.max.z() : world_mm.min.z())));
-  return box;
-}
-
 geometry::Aabb Workbench::roi_of_drag() const {
   // The voxels from the first to the current one on the slice, edge to edge; across the slice
   // the region keeps its extent (the whole volume when there was none).
@@ -1160,7 +1151,7 @@ geometry::Aabb Workbench::roi_of_drag() const {
   lo[a] = -0.5;
   hi[a] = double(m_ct->size(a)) - 0.5;
   if (m_roi_mm) {
-    const geometry::Aabb old = index_box(*m_roi_mm);
+    const geometry::Aabb old = m_ct->index_bounds(*m_roi_mm);
     lo[a] = std::max(lo[a], old.min[a]);
     hi[a] = std::min(hi[a], old.max[a]);
     if (!(lo[a] < hi[a])) {  // the old region lies outside the volume along this axis
@@ -1409,9 +1400,9 @@ void Workbench::rebuild_contours() {
   // The region of interest in voxel indices (the one being drawn, else the one set).
   std::optional<geometry::Aabb> roi;
   if (m_drag == Drag::Roi && m_roi_axis >= 0)
-    roi = index_box(roi_of_drag());
+    roi = m_ct->index_bounds(roi_of_drag());
   else if (m_roi_mm)
-    roi = index_box(*m_roi_mm);
+    roi = m_ct->index_bounds(*m_roi_mm);
   for (int a = 0; a < 3; ++a) {
     const SliceView shape(a, m_ct->size(), m_ct->spacing(), {0, 0, 1, 1});
     const int u = shape.u_axis(), v = shape.v_axis();

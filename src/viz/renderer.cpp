@@ -245,14 +245,11 @@ Renderer::Renderer(int width, int height) : m_width(width), m_height(height) {
                        std::to_string(width) + "x" + std::to_string(height));
 }
 
-void Renderer::grow_bounds(const Vec3& p) {
-  m_lo = m_lo.cwiseMin(p);
-  m_hi = m_hi.cwiseMax(p);
-}
+void Renderer::grow_bounds(const Vec3& p) { m_bounds.extend(p); }
 
 geometry::Aabb Renderer::bounds() const {
-  if (!(m_lo.array() <= m_hi.array()).all()) return {Vec3::Zero(), Vec3::Zero()};
-  return {m_lo, m_hi};
+  if (m_bounds.empty()) return {Vec3::Zero(), Vec3::Zero()};
+  return m_bounds;
 }
 
 void Renderer::add_surface(const geometry::TriangleMesh& mesh, const Vec3& colour_rgb,

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "ido/core/math.h"
+#include "ido/geometry/aabb.h"
 #include "ido/geometry/tet_mesh.h"
 #include "ido/geometry/triangle_mesh.h"
 #include "ido/image/volume.h"
@@ -169,8 +170,7 @@ class Renderer {
   std::vector<Slice> m_slices;
   std::optional<Camera> m_camera;
   Vec3 m_background = Vec3::Ones();
-  Vec3 m_lo = Vec3::Constant(INFINITY);
-  Vec3 m_hi = Vec3::Constant(-INFINITY);
+  geometry::Aabb m_bounds;  // of everything added
 
   void grow_bounds(const Vec3& p);
 };
