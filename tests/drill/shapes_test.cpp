@@ -6,13 +6,13 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <map>
 #include <string>
 
 #include <gtest/gtest.h>
 
 #include "ido/core/error.h"
 #include "ido/drill/tet_hierarchy.h"
+#include "ido/geometry/tet_quality.h"
 #include "support/test_support.h"
 
 namespace ido::drill {
@@ -49,21 +49,6 @@ TEST(Shapes, BlocksAreConformingAndFillTheirBox) {
   }
 }
 
-// Faces (sorted vertex triples) of @p m with the number of tetrahedra using each.
-std::map<std::array<std::int32_t, 3>, int> face_uses(const geometry::TetMesh& m) {
-  std::map<std::array<std::int32_t, 3>, int> uses;
-  for (const Tet& t : m.tets)
-    for (int f = 0; f < 4; ++f) {
-      std::array<std::int32_t, 3> face{};
-      int n = 0;
-      for (int k = 0; k < 4; ++k)
-        if (k != f) face[std::size_t(n++)] = t[std::size_t(k)];
-      std::sort(face.begin(), face.end());
-      ++uses[face];
-    }
-  return uses;
-}
-
 TEST(Shapes, CountsOrientationAndConformity) {
   struct Case {
     geometry::TetMesh mesh;
@@ -90,18 +75,19 @@ TEST(Shapes, CountsOrientationAndConformity) {
     }
     EXPECT_TRUE(test::rel_near(volume, c.size.prod(), 1e-12));
     // Conforming: every face is shared by two tetrahedra or lies on the box's surface.
-    for (const auto& [face, n] : face_uses(c.mesh)) {
-      EXPECT_LE(n, 2);
-      if (n == 1) {
-        bool on_box = false;
-        for (int a = 0; a < 3; ++a)
-          for (const double side : {0.0, c.size[a]}) {
-            bool all = true;
-            for (std::int32_t v : face) all = all && c.mesh.vertices[std::size_t(v)][a] == side;
-            on_box = on_box || all;
-          }
-        EXPECT_TRUE(on_box);
-      }
+    const geometry::TetMeshReport report = geometry::check_tet_mesh(c.mesh);
+    EXPECT_TRUE(report.boundary_closed && report.boundary_manifold);
+    const geometry::TriangleMesh boundary = geometry::tet_boundary(c.mesh);
+    EXPECT_EQ(boundary.triangles.size(), report.boundary_faces);
+    for (const Tri& face : boundary.triangles) {
+      bool on_box = false;
+      for (int a = 0; a < 3; ++a)
+        for (const double side : {0.0, c.size[a]}) {
+          bool all = true;
+          for (std::int32_t v : face) all = all && c.mesh.vertices[std::size_t(v)][a] == side;
+          on_box = on_box || all;
+        }
+      EXPECT_TRUE(on_box);
     }
     for (const Vec3& v : c.mesh.vertices) {
       EXPECT_TRUE((v.array() >= 0.0).all() && (v.array() <= c.size.array()).all());

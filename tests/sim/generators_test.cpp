@@ -2,12 +2,12 @@
 // The mesh generators: beams and cubes fill their box exactly with positively oriented,
 // conforming tetrahedra (6 or 5 per cell), with the documented vertex numbering and placement;
 // the voxel sphere holds exactly the cells whose centres are inside; bad sizes are refused.
+#include "ido/geometry/tet_quality.h"
 #include "ido/sim/generators.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <map>
 
 #include <gtest/gtest.h>
 
@@ -30,27 +30,18 @@ double total_volume(const geometry::TetMesh& m) {
   return sum;
 }
 
-/// Every face is used by one tetrahedron (the boundary) or two (conforming inside); returns the
-/// boundary's area (mm²).
+/// The boundary's area (mm²), checking that every face is used by one tetrahedron (the
+/// boundary) or two (conforming inside) and that the boundary is closed and manifold.
 double boundary_area(const geometry::TetMesh& m) {
-  std::map<std::array<std::int32_t, 3>, int> uses;
-  for (const Tet& t : m.tets)
-    for (int f = 0; f < 4; ++f) {
-      std::array<std::int32_t, 3> face{};
-      int n = 0;
-      for (int k = 0; k < 4; ++k)
-        if (k != f) face[std::size_t(n++)] = t[std::size_t(k)];
-      std::sort(face.begin(), face.end());
-      ++uses[face];
-    }
+  const geometry::TetMeshReport r = geometry::check_tet_mesh(m);
+  EXPECT_TRUE(r.boundary_closed);
+  EXPECT_TRUE(r.boundary_manifold);
+  const geometry::TriangleMesh b = geometry::tet_boundary(m);
+  EXPECT_EQ(b.triangles.size(), r.boundary_faces);
   double area = 0.0;
-  for (const auto& [face, n] : uses) {
-    EXPECT_LE(n, 2);
-    if (n == 1) {
-      const Vec3 &a = m.vertices[std::size_t(face[0])], &b = m.vertices[std::size_t(face[1])],
-                 &c = m.vertices[std::size_t(face[2])];
-      area += 0.5 * (b - a).cross(c - a).norm();
-    }
+  for (const Tri& t : b.triangles) {
+    const Vec3 &p = b.vertices[std::size_t(t[0])], &q = b.vertices[std::size_t(t[1])], &c = b.vertices[std::size_t(t[2])];
+    area += 0.5 * (q - p).cross(c - p).norm();
   }
   return area;
 }

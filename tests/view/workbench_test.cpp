@@ -78,22 +78,27 @@ double drill_replay_removed(const fs::path& dir, const fs::path& path, const std
   return read_json(dir / "cli_drill.json")["removed_volume_mm3"].get<double>();
 }
 
-/// Runs `ido view ARGS` in a fresh Xvfb server (24-bit screen) and captures its output.
-test::CommandResult run_view(const std::string& args, const fs::path& dir) {
+/// Runs `ido view ARGS` after @p launcher (a display server, or an environment without one)
+/// and captures its output. Mesa's and X11's own allocations are kept for the process's life
+/// (sanitizer builds only); intercept_tls_get_addr=0 for the reason given in
+/// cmake/IdoHelpers.cmake.
+test::CommandResult run_tool_view(const std::string& launcher, const std::string& args, const fs::path& dir) {
   const fs::path out = dir / "view-out.txt", err = dir / "view-err.txt";
-  // Mesa's and X11's own allocations kept for the process's life (sanitizer builds only);
-  // intercept_tls_get_addr=0 for the reason given in cmake/IdoHelpers.cmake.
   const fs::path supp = test::source_dir() / "tests" / "sanitizer" / "lsan-view.supp";
   const std::string cmd = fmt::format(
-      "xvfb-run -a -s '-screen 0 1280x1024x24' env LSAN_OPTIONS=suppressions={}:print_suppressions=0:intercept_tls_get_addr=0 {} view {} "
-      ">{} 2>{} </dev/null",
-      supp.string(), test::tool_path().string(), args, out.string(), err.string());
+      "{} env LSAN_OPTIONS=suppressions={}:print_suppressions=0:intercept_tls_get_addr=0 {} view {} >{} 2>{} </dev/null",
+      launcher, supp.string(), test::tool_path().string(), args, out.string(), err.string());
   const int status = std::system(cmd.c_str());
   test::CommandResult r;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   r.out = slurp(out);
   r.err = slurp(err);
   return r;
+}
+
+/// Runs `ido view ARGS` in a fresh Xvfb server (24-bit screen).
+test::CommandResult run_view(const std::string& args, const fs::path& dir) {
+  return run_tool_view("xvfb-run -a -s '-screen 0 1280x1024x24'", args, dir);
 }
 
 nlohmann::json event(std::int64_t frame, const char* type) { return {{"frame", frame}, {"type", type}}; }
@@ -127,18 +132,7 @@ void write_script(const fs::path& path, const nlohmann::json& events) {
 
 /// Runs `ido view ARGS` with no display at all (no DISPLAY, no Xvfb): --snapshot.
 test::CommandResult run_headless(const std::string& args, const fs::path& dir) {
-  const fs::path out = dir / "view-out.txt", err = dir / "view-err.txt";
-  const fs::path supp = test::source_dir() / "tests" / "sanitizer" / "lsan-view.supp";
-  const std::string cmd = fmt::format(
-      "env -u DISPLAY -u WAYLAND_DISPLAY LSAN_OPTIONS=suppressions={}:print_suppressions=0:intercept_tls_get_addr=0 {} view {} "
-      ">{} 2>{} </dev/null",
-      supp.string(), test::tool_path().string(), args, out.string(), err.string());
-  const int status = std::system(cmd.c_str());
-  test::CommandResult r;
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = slurp(out);
-  r.err = slurp(err);
-  return r;
+  return run_tool_view("env -u DISPLAY -u WAYLAND_DISPLAY", args, dir);
 }
 
 /// True when pixel (r, g, b) is @p rgb (0..1) as 8 bits, within 2 levels.
