@@ -151,10 +151,32 @@ LeakGuard::LeakGuard(const image::Volume<float>& smoothed, const IntensityModel&
   if (starts.empty()) return;  // the seeds sit outside their own band: nothing to guard
   const std::vector<std::uint8_t> region = flood(g, band, starts);
 
-  // Inside distance of the region (mm to the nearest voxel centre outside it).
-  image::Volume<std::uint8_t> outside = smoothed.like<std::uint8_t>(0);
-  for (std::size_t l = 0; l < n; ++l) outside.data()[l] = region[l] ? 0 : 1;
-  const image::Volume<float> inside = meshing::distance_to_mask(outside, {.threaded = threaded});
+  // Inside distance of the region (mm to the nearest voxel centre outside it). A region voxel's
+  // nearest outside voxel lies in the region's index box grown by one voxel, so the transform
+  // runs on that box only (the region is often a small part of the scan); it is 0 elsewhere.
+  image::IndexBox box = image::IndexBox::none();
+  for (std::size_t l = 0; l < n; ++l)
+    if (region[l]) box.extend(g.ijk(l));
+  for (int a = 0; a < 3; ++a) {
+    box.lo[a] = std::max<std::int64_t>(0, box.lo[a] - 1);
+    box.hi[a] = std::min<std::int64_t>(g.n[a] - 1, box.hi[a] + 1);
+  }
+  // The distance to a mask over the box, pasted into a grid-sized volume filled with @p fill.
+  const auto distance_in_box = [&](const std::vector<std::uint8_t>& mask, float fill) {
+    image::Volume<std::uint8_t> m(box.extent(), smoothed.spacing(), Vec3::Zero(), Mat3::Identity(), 0);
+    box.for_each([&](std::int64_t i, std::int64_t j, std::int64_t k) {
+      m(i - box.lo[0], j - box.lo[1], k - box.lo[2]) = mask[g.at(i, j, k)];
+    });
+    const image::Volume<float> d = meshing::distance_to_mask(m, {.threaded = threaded});
+    image::Volume<float> full = smoothed.like<float>(fill);
+    box.for_each([&](std::int64_t i, std::int64_t j, std::int64_t k) {
+      full.data()[g.at(i, j, k)] = d(i - box.lo[0], j - box.lo[1], k - box.lo[2]);
+    });
+    return full;
+  };
+  std::vector<std::uint8_t> outside(n);
+  for (std::size_t l = 0; l < n; ++l) outside[l] = region[l] ? 0 : 1;
+  const image::Volume<float> inside = distance_in_box(outside, 0.0f);
   for (std::size_t s : starts) m_seed_radius_mm = std::max(m_seed_radius_mm, ridge_radius(g, inside, s));
   if (!std::isfinite(m_seed_radius_mm)) return;  // the band fills the whole grid: no scale to compare with
 
@@ -168,7 +190,8 @@ LeakGuard::LeakGuard(const image::Volume<float>& smoothed, const IntensityModel&
     for (std::size_t l = 0; l < n; ++l)
       if (region[l] && inside.data()[l] > R) core.data()[l] = 1, any = true;
     if (any) {
-      const image::Volume<float> to_core = meshing::distance_to_mask(core, {.threaded = threaded});
+      // The core lies in the region, so a region voxel's nearest core voxel lies in its box.
+      const image::Volume<float> to_core = distance_in_box(core.data(), std::numeric_limits<float>::infinity());
       bool seed_in_chamber = false;
       for (std::size_t s : starts) seed_in_chamber |= to_core.data()[s] <= R;
       // A seed the opening covers is itself in a wide region (the user meant it): no chamber test.
@@ -326,24 +349,33 @@ LeakGuard::LeakGuard(const image::Volume<float>& smoothed, const IntensityModel&
   // The balloon's vertices sit on the wall, half-way between band and surroundings, often in a
   // voxel just outside the band: close two layers of such voxels around the closed ones (but
   // none that touches the open band), so a held front cannot creep past a cap along the wall.
-  for (int layer = 0; layer < 2; ++layer) {
+  // Only voxels next to a closed one can change: each layer visits the closed voxels' index box
+  // grown by one more voxel.
+  image::IndexBox near_closed = image::IndexBox::none();
+  for (std::size_t l = 0; l < n; ++l)
+    if (cause[l]) near_closed.extend(g.ijk(l));
+  for (int layer = 0; layer < 2 && !near_closed.empty(); ++layer) {
+    for (int a = 0; a < 3; ++a) {
+      near_closed.lo[a] = std::max<std::int64_t>(0, near_closed.lo[a] - 1);
+      near_closed.hi[a] = std::min<std::int64_t>(g.n[a] - 1, near_closed.hi[a] + 1);
+    }
     std::vector<std::uint8_t> grown = cause;
-    for (std::size_t l = 0; l < n; ++l) {
-      if (region[l] || cause[l]) continue;
-      const Index3 c = g.ijk(l);
+    near_closed.for_each([&](std::int64_t ci, std::int64_t cj, std::int64_t ck) {
+      const std::size_t l = g.at(ci, cj, ck);
+      if (region[l] || cause[l]) return;
       std::uint8_t from = 0;
       bool touches_open = false;
       for (int dk = -1; dk <= 1 && !touches_open; ++dk)
         for (int dj = -1; dj <= 1; ++dj)
           for (int di = -1; di <= 1; ++di) {
-            const std::int64_t i = c[0] + di, j = c[1] + dj, k = c[2] + dk;
+            const std::int64_t i = ci + di, j = cj + dj, k = ck + dk;
             if (!g.inside(i, j, k)) continue;
             const std::size_t q = g.at(i, j, k);
             if (region[q] && !cause[q]) touches_open = true;
             if (cause[q]) from = cause[q];
           }
       if (from && !touches_open) grown[l] = from;
-    }
+    });
     cause = std::move(grown);
   }
   m_closed = smoothed.like<std::uint8_t>(0);
