@@ -93,7 +93,9 @@ TEST(IndexBox, VoxelsInABallEqualABruteForceScan) {
       if ((v.index_to_world(Vec3(double(i), double(j), double(k))) - centre).norm() <= r) brute.emplace_back(i, j, k);
     });
     EXPECT_EQ(fast, brute) << "radius " << r;
-    if (r > 4) EXPECT_GT(fast.size(), 20u);
+    if (r > 4) {
+      EXPECT_GT(fast.size(), 20u);
+    }
   }
 }
 
