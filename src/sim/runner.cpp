@@ -56,6 +56,12 @@ std::optional<std::string> DivergenceWatch::check_energy(const World& world, con
   return std::nullopt;
 }
 
+std::string DivergenceWatch::message(std::int64_t step, std::optional<std::int64_t> of_steps, double time_s,
+                                     const std::string& cause) const {
+  return fmt::format("simulation diverged at step {}{} (t = {:.6g} s): {}; reduce dt_s (now {:g}) or use implicit_euler",
+                     step, of_steps ? fmt::format(" of {}", *of_steps) : std::string(), time_s, cause, m_dt_s);
+}
+
 RunResult run(World& world, const RunOptions& options, std::span<RunObserver* const> observers,
               Progress* progress) {
   if (!(options.dt_s > 0.0) || !std::isfinite(options.dt_s))
@@ -88,10 +94,8 @@ RunResult run(World& world, const RunOptions& options, std::span<RunObserver* co
   // A state the watch refuses ends the run before anything of it is handed on.
   auto stop_if = [&](std::int64_t step, const std::optional<std::string>& cause) {
     if (!cause) return;
-    throw Diverged(fmt::format("{}: simulation diverged at step {} of {} (t = {:.6g} s): {}; reduce dt_s (now {:g}) "
-                               "or use implicit_euler",
-                               options.label.empty() ? std::string("scene") : options.label, step, options.steps,
-                               world.time_s(), *cause, options.dt_s),
+    throw Diverged(fmt::format("{}: {}", options.label.empty() ? std::string("scene") : options.label,
+                               watch.message(step, options.steps, world.time_s(), *cause)),
                    step);
   };
   sample(0, energies(world));

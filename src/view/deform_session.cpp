@@ -390,9 +390,7 @@ void DeformSession::work() {
       std::optional<std::string> cause = watch->check_finite(world);
       if (!cause) cause = watch->check_energy(world, energy);
       if (cause)
-        error = fmt::format("simulation diverged at step {} (t = {:.6g} s): {}; reduce dt_s (now {:g}) or use "
-                            "implicit_euler",
-                            m_step_base + world.step_count(), m_time_base_s + world.time_s(), *cause, m_dt_s);
+        error = watch->message(m_step_base + world.step_count(), std::nullopt, m_time_base_s + world.time_s(), *cause);
     }
     sample(step_ms, energy);
     if (requested) m_step_requests.fetch_sub(1);

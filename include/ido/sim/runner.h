@@ -98,6 +98,10 @@ class DivergenceWatch {
   [[nodiscard]] std::optional<std::string> check_energy(const World& world, const EnergyReport& energy) const;
   /// The bound (mJ) the kinetic + elastic energy of @p world's present state is held to.
   [[nodiscard]] double energy_bound_mj(const World& world) const;
+  /// What a caller says when a state fails: "simulation diverged at step N of M (t = … s):
+  /// <cause>; reduce dt_s (now …) or use implicit_euler" (" of M" only with @p of_steps).
+  [[nodiscard]] std::string message(std::int64_t step, std::optional<std::int64_t> of_steps, double time_s,
+                                    const std::string& cause) const;
 
  private:
   std::vector<Vec3> m_start;            ///< positions at the start (mm)
