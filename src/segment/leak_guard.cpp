@@ -154,13 +154,14 @@ LeakGuard::LeakGuard(const image::Volume<float>& smoothed, const IntensityModel&
   // Inside distance of the region (mm to the nearest voxel centre outside it). A region voxel's
   // nearest outside voxel lies in the region's index box grown by one voxel, so the transform
   // runs on that box only (the region is often a small part of the scan); it is 0 elsewhere.
-  image::IndexBox box = image::IndexBox::none();
-  for (std::size_t l = 0; l < n; ++l)
-    if (region[l]) box.extend(g.ijk(l));
-  for (int a = 0; a < 3; ++a) {
-    box.lo[a] = std::max<std::int64_t>(0, box.lo[a] - 1);
-    box.hi[a] = std::min<std::int64_t>(g.n[a] - 1, box.hi[a] + 1);
-  }
+  // The index box of a mask's nonzero voxels.
+  const auto box_of = [&](const std::vector<std::uint8_t>& mask) {
+    image::IndexBox b = image::IndexBox::none();
+    for (std::size_t l = 0; l < n; ++l)
+      if (mask[l]) b.extend(g.ijk(l));
+    return b;
+  };
+  const image::IndexBox box = box_of(region).grown(1, g.n);
   // The distance to a mask over the box, pasted into a grid-sized volume filled with @p fill.
   const auto distance_in_box = [&](const std::vector<std::uint8_t>& mask, float fill) {
     image::Volume<std::uint8_t> m(box.extent(), smoothed.spacing(), Vec3::Zero(), Mat3::Identity(), 0);
@@ -351,14 +352,9 @@ LeakGuard::LeakGuard(const image::Volume<float>& smoothed, const IntensityModel&
   // none that touches the open band), so a held front cannot creep past a cap along the wall.
   // Only voxels next to a closed one can change: each layer visits the closed voxels' index box
   // grown by one more voxel.
-  image::IndexBox near_closed = image::IndexBox::none();
-  for (std::size_t l = 0; l < n; ++l)
-    if (cause[l]) near_closed.extend(g.ijk(l));
+  image::IndexBox near_closed = box_of(cause);
   for (int layer = 0; layer < 2 && !near_closed.empty(); ++layer) {
-    for (int a = 0; a < 3; ++a) {
-      near_closed.lo[a] = std::max<std::int64_t>(0, near_closed.lo[a] - 1);
-      near_closed.hi[a] = std::min<std::int64_t>(g.n[a] - 1, near_closed.hi[a] + 1);
-    }
+    near_closed = near_closed.grown(1, g.n);
     std::vector<std::uint8_t> grown = cause;
     near_closed.for_each([&](std::int64_t ci, std::int64_t cj, std::int64_t ck) {
       const std::size_t l = g.at(ci, cj, ck);

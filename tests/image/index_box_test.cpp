@@ -36,6 +36,15 @@ TEST(IndexBox, NoneGrowsToTheBoundsOfTheVoxelsAdded) {
   EXPECT_FALSE(b.contains(2, 0, 8));
 }
 
+TEST(IndexBox, GrownAddsVoxelsOnEverySideWithinTheGrid) {
+  const IndexBox b{{0, 3, 5}, {2, 4, 9}};
+  const IndexBox g = b.grown(2, {10, 10, 10});
+  EXPECT_EQ(g.lo, (Index3{0, 1, 3}));
+  EXPECT_EQ(g.hi, (Index3{4, 6, 9}));
+  EXPECT_EQ(b.grown(0, {10, 10, 10}).lo, b.lo);
+  EXPECT_EQ(b.grown(0, {10, 10, 10}).hi, b.hi);
+}
+
 TEST(IndexBox, ForEachVisitsEveryVoxelOnceInStorageOrder) {
   const Volume<float> v({4, 3, 5});
   const IndexBox b = IndexBox::of_grid(v.size());

@@ -55,6 +55,15 @@ struct IndexBox {
       hi[a] = std::max(hi[a], p[a]);
     }
   }
+  /// The box grown by @p voxels on every side, clipped to a grid of @p size.
+  [[nodiscard]] IndexBox grown(std::int64_t voxels, const Index3& size) const noexcept {
+    IndexBox b;
+    for (int a = 0; a < 3; ++a) {
+      b.lo[a] = std::max<std::int64_t>(0, lo[a] - voxels);
+      b.hi[a] = std::min<std::int64_t>(size[a] - 1, hi[a] + voxels);
+    }
+    return b;
+  }
   /// Calls @p f(i, j, k) for every voxel of the box, i fastest, then j, then k (storage order).
   template <class F>
   void for_each(F&& f) const {
