@@ -238,12 +238,22 @@ LeakGuard::LeakGuard(const image::Volume<float>& smoothed, const IntensityModel&
     // must lie in the band). A vertebral body is darker inside than at its end plates, so a seed
     // off its centre sees a dip of its own body (abdomen-spine L1 1.5 mm off the voxel seed: 34
     // HU deep, against 98 for the disc past it): the first valley at least half as deep as the
-    // deepest one along d is the slab. Returns {valley, that highest point after it, depth} in mm
-    // along d, or depth < 0.
+    // deepest one along d is the slab. The profile stops at the image's border, past which
+    // nothing is known; where it descends into the border (its last sample the lowest of the
+    // last 15 mm), the image ends in a valley whose far side is not seen: it cannot be a slab,
+    // but its drop below the highest value before it takes part in "the deepest", so that the
+    // seed's own shallower dips before it are not taken for a slab either (abdomen-dicom's
+    // vertebra, its lower disc in the last two slices: a 19 HU dip in the body against the
+    // disc's 116 HU drop, which cut the body in half). Returns {valley, that highest point
+    // after it, depth} in mm along d, or depth < 0.
     struct Slab { double t_min = -1, t_back = -1, depth = -1; };
     auto find_slab = [&](const Vec3& d) {
       std::vector<double> prof;
-      for (double t = 0; t <= o.neighbour_search_mm + look_mm; t += dt) prof.push_back(disc_mean(smoothed, s0 + t * d, d, disc_r));
+      for (double t = 0; t <= o.neighbour_search_mm + look_mm; t += dt) {
+        if (!voxel_of(smoothed, g, s0 + t * d)) break;
+        prof.push_back(disc_mean(smoothed, s0 + t * d, d, disc_r));
+      }
+      if (prof.empty()) return Slab{};
       const auto m = std::ptrdiff_t(prof.size()), last = std::ptrdiff_t(o.neighbour_search_mm / dt);
       const auto ahead = std::ptrdiff_t(look_mm / dt);
       double p1 = prof[0];
@@ -265,6 +275,13 @@ LeakGuard::LeakGuard(const image::Volume<float>& smoothed, const IntensityModel&
       }
       double deepest = -1;
       for (const Slab& sl : found) deepest = std::max(deepest, sl.depth);
+      if (m > 1 && m - 1 <= last) {  // the image's border lies within the search
+        const double end = prof.back();
+        bool descends = true;
+        for (std::ptrdiff_t q = std::max<std::ptrdiff_t>(0, m - 1 - ahead); q < m; ++q)
+          descends = descends && prof[std::size_t(q)] >= end;
+        if (descends && p1 - end >= depth) deepest = std::max(deepest, p1 - end);
+      }
       for (const Slab& sl : found)
         if (sl.depth >= 0.5 * deepest) return sl;
       return Slab{};
@@ -282,6 +299,11 @@ LeakGuard::LeakGuard(const image::Volume<float>& smoothed, const IntensityModel&
           const double a = deg * kPi / 180.0;
           const Vec3 d = (std::cos(a) * sign * axis + std::sin(a) * toward).normalized();
           const Slab sl = find_slab(d);
+          // A tilted slab must be a tolerance deep: eight more lines multiply the chances that the
+          // marrow's own texture passes the axis's 0.3 tolerance (abdomen-dicom's vertebra, 2 mm
+          // slices: dips of 16-25 HU in its body along four of them); the lumbosacral disc the
+          // tilt is for lies 1.6 tolerances deep (abdomen-spine's L5).
+          if (deg > 0.0 && sl.depth < model.tolerance) continue;
           if (sl.depth > best.depth) best = sl, dir = d;
           if (deg == 0.0) break;  // the axis itself once
         }

@@ -139,6 +139,53 @@ TEST(LeakGuard, MaxRadiusClosesWhereAWiderBallFits) {
   EXPECT_EQ(guard.cause_at(Vec3(24, 24, 30)), LeakCause::None);
 }
 
+// A column of vertebral bodies along z on a 1 x 1 x 2 mm grid (a 2 mm-slice scan): a cylinder
+// of radius 12 mm whose slices k have the grey levels of @p slices (HU), 40 HU around it,
+// blurred by 0.7 voxel. Slices of @p disc HU have a bony rim (r > 9 mm, @p rim HU), as real
+// neighbours touch through osteophytes. Slices are 2 mm apart: slice k lies at z = 2k mm.
+image::Volume<float> column_volume(const std::vector<float>& slices, float disc, float rim) {
+  const auto nz = std::int64_t(slices.size());
+  image::Volume<float> v({40, 40, nz}, Vec3(1, 1, 2));
+  for (std::int64_t k = 0; k < nz; ++k)
+    for (std::int64_t j = 0; j < 40; ++j)
+      for (std::int64_t i = 0; i < 40; ++i) {
+        const double r = std::hypot(double(i) - 20.0, double(j) - 20.0);
+        const float x = slices[std::size_t(k)];
+        v(i, j, k) = r > 12.0 ? 40.f : (x == disc && r > 9.0 ? rim : x);
+      }
+  return image::gaussian_smooth(v, 0.7);
+}
+
+// A body is darker in places than at its end plates. Where its disc lies in the image's last
+// slices, the dip is the only valley with a far side, and once cut the body in half; the image
+// ending in a valley as deep as the disc now ranks it, so no neighbour is put there. With the
+// neighbour in view the disc is still found.
+TEST(LeakGuard, ABodyWhoseDiscLiesAtTheImagesBorderIsNotCutAtItsOwnDip) {
+  const float disc = 70, plate = 190, marrow = 150, dip = 130;
+  LeakControlOptions o;
+  o.separate_neighbours = true;
+  const IntensityModel bone{marrow, 50, true};
+  // Slices 0-1 the disc, 2-3 the end plate, 6-7 the dip, marrow up to the image's top.
+  std::vector<float> cut = {disc, disc, plate, plate, marrow, marrow, dip, dip};
+  cut.resize(20, marrow);
+  const LeakGuard at_border(column_volume(cut, disc, plate), bone, {Vec3(20, 20, 20)}, o);
+  ASSERT_TRUE(at_border.active());
+  EXPECT_TRUE(at_border.neighbour_markers_mm().empty());
+  EXPECT_EQ(at_border.cause_at(Vec3(20, 20, 6)), LeakCause::None);  // the body's lower end plate
+  EXPECT_EQ(at_border.cause_at(Vec3(20, 20, 10)), LeakCause::None);
+
+  // The same body with its neighbour below: slices 0-7 the neighbour's marrow, 8-9 its end
+  // plate, 10-11 the disc, then the body above as before (seed at slice 22).
+  std::vector<float> stack = {marrow, marrow, marrow, marrow, marrow, marrow, marrow, marrow, plate, plate};
+  stack.insert(stack.end(), cut.begin(), cut.end());
+  const LeakGuard with_neighbour(column_volume(stack, disc, plate), bone, {Vec3(20, 20, 44)}, o);
+  ASSERT_EQ(with_neighbour.neighbour_markers_mm().size(), 1u);
+  EXPECT_LT(with_neighbour.neighbour_markers_mm().front().z(), 20.0);  // below the disc (z 20-22 mm)
+  EXPECT_EQ(with_neighbour.cause_at(Vec3(20, 20, 6)), LeakCause::Neighbour);
+  EXPECT_EQ(with_neighbour.cause_at(Vec3(20, 20, 26)), LeakCause::None);  // the seed's end plate
+  EXPECT_EQ(with_neighbour.cause_at(Vec3(20, 20, 34)), LeakCause::None);  // its dip
+}
+
 TEST(LeakGuard, RejectsBadOptions) {
   const auto ct = vessel_volume({16, 16, 16}, [](const Vec3& p) { return (p - Vec3(8, 8, 8)).norm() < 5; });
   LeakControlOptions o;
