@@ -187,27 +187,37 @@ LeakGuard::LeakGuard(const image::Volume<float>& smoothed, const IntensityModel&
   // it wraps, where the band holds both): read on the image smoothed further, by two voxels or
   // a quarter of the seed region's radius if less (the vein phantom's noise: 1.0 HU there
   // against 4.4 on the balloon's image), the seed region's level and spread (in the ball of
-  // half its radius around the seeds) and the chamber's median. When they lie more than four spreads
-  // apart, the chamber's voxels nearer the seed's level are opened again: the vessel goes on
-  // through the chamber's wrap, the chamber stays closed. Same-level chambers (a ventricle past
-  // a valve) are left as they are.
+  // half its radius around the seeds) and the chamber's median. When they lie more than four
+  // spreads apart, the chamber's voxels nearer the seed's level are opened again: the vessel
+  // goes on through the chamber's wrap, the chamber stays closed. Same-level chambers (a
+  // ventricle past a valve) are left as they are. The smoothing runs on the region's box grown
+  // by the kernel's reach, so the region's voxels see what the whole image would give them.
   const auto reopen_other_level = [&](std::vector<std::uint8_t>& closed) {
-    const image::Volume<float> wide = image::gaussian_smooth(smoothed, std::min(2.0 * h, 0.25 * m_seed_radius_mm), {.threaded = threaded});
-    const std::vector<float>& W = wide.data();
+    const double sigma_mm = std::min(2.0 * h, 0.25 * m_seed_radius_mm);
+    const image::IndexBox wb = box.grown(std::int64_t(std::ceil(4.0 * sigma_mm / h)) + 1, g.n);
+    image::Volume<float> part(wb.extent(), smoothed.spacing(), Vec3::Zero(), Mat3::Identity(), 0.0f);
+    wb.for_each([&](std::int64_t i, std::int64_t j, std::int64_t k) {
+      part(i - wb.lo[0], j - wb.lo[1], k - wb.lo[2]) = I[g.at(i, j, k)];
+    });
+    const image::Volume<float> wide = image::gaussian_smooth(part, sigma_mm, {.threaded = threaded});
+    const auto W = [&](std::size_t l) {
+      const Index3 c = g.ijk(l);
+      return double(wide(c[0] - wb.lo[0], c[1] - wb.lo[1], c[2] - wb.lo[2]));
+    };
     std::vector<double> seed_levels, chamber_levels;
     for (const Vec3& seed : seeds_mm)
       image::for_each_voxel_in_ball(smoothed, seed, 0.5 * m_seed_radius_mm, [&](std::int64_t i, std::int64_t j, std::int64_t k) {
-        if (const std::size_t q = g.at(i, j, k); region[q]) seed_levels.push_back(W[q]);
+        if (const std::size_t q = g.at(i, j, k); region[q]) seed_levels.push_back(W(q));
       });
     for (std::size_t l = 0; l < n; ++l)
-      if (closed[l] == std::uint8_t(LeakCause::Chamber)) chamber_levels.push_back(W[l]);
+      if (closed[l] == std::uint8_t(LeakCause::Chamber)) chamber_levels.push_back(W(l));
     if (seed_levels.empty() || chamber_levels.empty()) return;
     const double seed_level = median(seed_levels), chamber_level = median(chamber_levels);
     for (double& v : seed_levels) v = std::abs(v - seed_level);
     const double spread = 1.4826 * median(seed_levels);
     if (!(std::abs(seed_level - chamber_level) > 4.0 * spread)) return;
     for (std::size_t l = 0; l < n; ++l)
-      if (closed[l] == std::uint8_t(LeakCause::Chamber) && std::abs(W[l] - seed_level) < std::abs(W[l] - chamber_level))
+      if (closed[l] == std::uint8_t(LeakCause::Chamber) && std::abs(W(l) - seed_level) < std::abs(W(l) - chamber_level))
         closed[l] = 0;
   };
   // Chambers: the opening of the region by a ball of radius R.
