@@ -10,6 +10,7 @@
 #include <functional>
 #include <limits>
 #include <queue>
+#include <type_traits>
 
 #include "ido/core/error.h"
 #include "ido/core/statistics.h"
@@ -163,13 +164,19 @@ LeakGuard::LeakGuard(const image::Volume<float>& smoothed, const IntensityModel&
     return b;
   };
   const image::IndexBox box = box_of(region).grown(1, g.n);
+  // A grid-sized array's values over an index box, as a volume of the box's extent (the box's
+  // lowest corner at index 0).
+  const auto cut = [&](const image::IndexBox& b, const auto& values) {
+    using T = std::decay_t<decltype(values[0])>;
+    image::Volume<T> v(b.extent(), smoothed.spacing(), Vec3::Zero(), Mat3::Identity(), T{});
+    b.for_each([&](std::int64_t i, std::int64_t j, std::int64_t k) {
+      v(i - b.lo[0], j - b.lo[1], k - b.lo[2]) = values[g.at(i, j, k)];
+    });
+    return v;
+  };
   // The distance to a mask over the box, pasted into a grid-sized volume filled with @p fill.
   const auto distance_in_box = [&](const std::vector<std::uint8_t>& mask, float fill) {
-    image::Volume<std::uint8_t> m(box.extent(), smoothed.spacing(), Vec3::Zero(), Mat3::Identity(), 0);
-    box.for_each([&](std::int64_t i, std::int64_t j, std::int64_t k) {
-      m(i - box.lo[0], j - box.lo[1], k - box.lo[2]) = mask[g.at(i, j, k)];
-    });
-    const image::Volume<float> d = meshing::distance_to_mask(m, {.threaded = threaded});
+    const image::Volume<float> d = meshing::distance_to_mask(cut(box, mask), {.threaded = threaded});
     image::Volume<float> full = smoothed.like<float>(fill);
     box.for_each([&](std::int64_t i, std::int64_t j, std::int64_t k) {
       full.data()[g.at(i, j, k)] = d(i - box.lo[0], j - box.lo[1], k - box.lo[2]);
@@ -195,11 +202,7 @@ LeakGuard::LeakGuard(const image::Volume<float>& smoothed, const IntensityModel&
   const auto reopen_other_level = [&](std::vector<std::uint8_t>& closed) {
     const double sigma_mm = std::min(2.0 * h, 0.25 * m_seed_radius_mm);
     const image::IndexBox wb = box.grown(std::int64_t(std::ceil(4.0 * sigma_mm / h)) + 1, g.n);
-    image::Volume<float> part(wb.extent(), smoothed.spacing(), Vec3::Zero(), Mat3::Identity(), 0.0f);
-    wb.for_each([&](std::int64_t i, std::int64_t j, std::int64_t k) {
-      part(i - wb.lo[0], j - wb.lo[1], k - wb.lo[2]) = I[g.at(i, j, k)];
-    });
-    const image::Volume<float> wide = image::gaussian_smooth(part, sigma_mm, {.threaded = threaded});
+    const image::Volume<float> wide = image::gaussian_smooth(cut(wb, I), sigma_mm, {.threaded = threaded});
     const auto W = [&](std::size_t l) {
       const Index3 c = g.ijk(l);
       return double(wide(c[0] - wb.lo[0], c[1] - wb.lo[1], c[2] - wb.lo[2]));
@@ -212,10 +215,9 @@ LeakGuard::LeakGuard(const image::Volume<float>& smoothed, const IntensityModel&
     for (std::size_t l = 0; l < n; ++l)
       if (closed[l] == std::uint8_t(LeakCause::Chamber)) chamber_levels.push_back(W(l));
     if (seed_levels.empty() || chamber_levels.empty()) return;
-    const double seed_level = median(seed_levels), chamber_level = median(chamber_levels);
-    for (double& v : seed_levels) v = std::abs(v - seed_level);
-    const double spread = 1.4826 * median(seed_levels);
-    if (!(std::abs(seed_level - chamber_level) > 4.0 * spread)) return;
+    const image::RobustStats seed = image::robust_stats(std::move(seed_levels));
+    const double seed_level = seed.median, chamber_level = median(std::move(chamber_levels));
+    if (!(std::abs(seed_level - chamber_level) > 4.0 * seed.sigma())) return;
     for (std::size_t l = 0; l < n; ++l)
       if (closed[l] == std::uint8_t(LeakCause::Chamber) && std::abs(W(l) - seed_level) < std::abs(W(l) - chamber_level))
         closed[l] = 0;
