@@ -16,8 +16,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
-#include <cstring>
 #include <filesystem>
 #include <optional>
 #include <utility>
@@ -43,69 +41,8 @@
 #include "ido/io/volume_io.h"
 #include "ido/viz/renderer.h"
 
-#include <unordered_map>
-#include <ctime>
-namespace ido::drill { // TEMP-OLD
-namespace {
-struct KeyHash {
-  std::size_t operator()(const PointKey& k) const noexcept {
-    std::uint64_t h = 0;
-    for (std::size_t i = 0; i < 4; ++i) {
-      std::uint64_t x = h ^ ((static_cast<std::uint64_t>(static_cast<std::uint32_t>(k.id[i])) << 32) |
-                             static_cast<std::uint32_t>(k.weight[i]));
-      x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
-      x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
-      h = x ^ (x >> 31);
-    }
-    return static_cast<std::size_t>(h);
-  }
-};
-}  // namespace
-
-geometry::TetMesh old_full_leaf_mesh(const TetHierarchy& hierarchy) {
-  geometry::TetMesh mesh;
-  // The leaves are counted first, so that the tetrahedra and their fields are allocated once
-  // at their size (grown by doubling, each was held twice while it was copied).
-  std::size_t leaves = 0;
-  for (std::size_t r = 0; r < hierarchy.root_count(); ++r)
-    hierarchy.for_each_leaf(r, [&](const NodeRef&, NodeState s) { leaves += s == NodeState::Full ? 1U : 0U; });
-  mesh.tets.reserve(leaves);
-  auto& depth = mesh.cell_fields["depth"];
-  auto& density = mesh.cell_fields["density"];
-  auto& root = mesh.cell_fields["root"];
-  for (auto* f : {&depth, &density, &root}) f->values.reserve(leaves);
-  // Vertices are welded by their exact keys, numbered in order of first use. A point strictly
-  // inside root r (four non-zero weights) is a vertex of r's leaves only, so it is looked up
-  // in a map of r's points that is emptied after r; points on the roots' faces, edges and
-  // corners in a map kept to the end. The numbering is that of a single map.
-  std::unordered_map<PointKey, std::int32_t, KeyHash> shared, inner;
-  for (std::size_t r = 0; r < hierarchy.root_count(); ++r) {
-    inner.clear();
-    hierarchy.for_each_leaf(r, [&](const NodeRef& n, NodeState s) {
-      if (s != NodeState::Full) return;
-      const NodeGeometry g = hierarchy.geometry(n);
-      Tet t{};
-      for (std::size_t k = 0; k < 4; ++k) {
-        const PointKey key = point_key(hierarchy, r, g.vertex[k]);
-        auto& index = key.id[3] >= 0 ? inner : shared;
-        const auto [it, inserted] = index.try_emplace(key, static_cast<std::int32_t>(mesh.vertices.size()));
-        if (inserted) mesh.vertices.push_back(point_position(key, hierarchy.vertices()));
-        t[k] = it->second;
-      }
-      if (g.flipped) std::swap(t[2], t[3]);
-      mesh.tets.push_back(t);
-      depth.values.push_back(n.depth);
-      density.values.push_back(hierarchy.density(r));
-      root.values.push_back(static_cast<double>(r));
-    });
-  }
-  return mesh;
-}
-
-}
 namespace ido::cli {
 namespace {
-double thread_cpu() { timespec t{}; clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t); return double(t.tv_sec) + 1e-9 * double(t.tv_nsec); } // TEMP
 
 struct DrillOptions {
   std::string mesh;
@@ -136,16 +73,6 @@ std::size_t peak_rss_bytes() {
   rusage u{};
   if (::getrusage(RUSAGE_SELF, &u) != 0) return 0;
   return static_cast<std::size_t>(u.ru_maxrss) * 1024U;  // KiB on Linux
-}
-
-// TEMP-RSS
-void rss_trace(const char* what) {
-  if (!std::getenv("IDO_RSS_TRACE")) return;
-  std::FILE* f = std::fopen("/proc/self/status", "r");
-  char line[256];
-  while (f && std::fgets(line, sizeof line, f))
-    if (!std::strncmp(line, "VmRSS", 5) || !std::strncmp(line, "VmHWM", 5)) std::fprintf(stderr, "%s %s", what, line);
-  if (f) std::fclose(f);
 }
 
 // Returns the heap's freed memory to the system (glibc; elsewhere nothing to do).
@@ -257,11 +184,8 @@ void run(const DrillOptions& o, const GlobalOptions& g) {
     mem = sim.memory_use();
     if (!o.report.empty()) r = drill_session_json(hierarchy, sim, so, before);
     st = sim.stats();
-    rss_trace("session-end");
     lists = sim.take_render_v_lists();
-    rss_trace("taken");
   }
-  rss_trace("sim-gone");
   // The outputs one at a time, each freed before the next is made: the surface (assembled
   // from the v_lists taken over, which it frees root by root), then the leaf mesh. Between
   // them the freed memory goes back to the system: ido's heap policy keeps freed memory
@@ -271,24 +195,16 @@ void run(const DrillOptions& o, const GlobalOptions& g) {
   std::size_t surface_triangles = 0, surface_bytes = 0, leaf_bytes = 0;
   if (!o.surface.empty() || !o.report.empty()) {
     // Held compactly (point keys, triangles in blocks) and, as a .vtp, streamed to the file.
-    rss_trace("trimmed");
-    const double s0 = thread_cpu();  // TEMP
     const drill::AssembledSurface surface(std::move(lists), hierarchy.vertices());
-    rss_trace("assembled");
     surface_triangles = surface.triangle_count();
     surface_bytes = surface.memory_bytes();
     if (!o.surface.empty()) io::write_drilled_surface(surface_tmp, surface);
-    rss_trace("surface-written");
-    if (std::getenv("IDO_RSS_TRACE")) std::fprintf(stderr, "surface cpu %.3f s\n", thread_cpu() - s0);
   }
   lists = {};
   const std::size_t surface_peak = peak_rss_bytes();  // the session and the surface
   trim_heap();
   // The leaf mesh goes to the file as the hierarchy is walked (a .vtu holds no mesh).
-  const double c0 = thread_cpu();  // TEMP
-  if (std::getenv("IDO_OLD_LEAF")) { const auto m = drill::old_full_leaf_mesh(hierarchy); io::write_tet_mesh(output_tmp, m); }
-  else leaf_bytes = io::write_leaf_mesh(output_tmp, hierarchy).memory_bytes;
-  if (std::getenv("IDO_RSS_TRACE")) std::fprintf(stderr, "leaf write cpu %.3f s\n", thread_cpu() - c0);
+  leaf_bytes = io::write_leaf_mesh(output_tmp, hierarchy).memory_bytes;
   trim_heap();
   if (writer) {
     // The camera is fixed by the first picture (the intact mesh) and kept for the rest.

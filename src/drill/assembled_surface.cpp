@@ -10,24 +10,6 @@
 #include <utility>
 
 #include "point_index.h"
-#include <cstdio>
-#include <cstdlib>
-#include <cstring>
-#include <malloc.h>
-namespace { // TEMP-RSS
-void rss_trace2(const char* what) {
-  if (!std::getenv("IDO_RSS_TRACE")) return;
-  std::FILE* f = std::fopen("/proc/self/status", "r");
-  char line[256];
-  long rss = 0;
-  while (f && std::fgets(line, sizeof line, f))
-    if (!std::strncmp(line, "VmRSS", 5)) rss = std::atol(line + 6);
-  if (f) std::fclose(f);
-  const auto mi = mallinfo2();
-  std::fprintf(stderr, "  %s rss %ld kB heap-arena %zu kB in-use %zu kB mmap %zu kB\n", what, rss, mi.arena / 1024, mi.uordblks / 1024, mi.hblkhd / 1024);
-}
-}
-
 namespace ido::drill {
 
 struct AssembledSurface::Data {
@@ -247,7 +229,6 @@ void AssembledSurface::assemble(std::span<const std::vector<SurfaceFace>> v_list
   d.keys = detail::PointIndex();
   detail::BlockArray<Tri> corners;
   std::vector<std::size_t> face_end(v_lists.size());
-  rss_trace2("start");
   for (std::size_t r = 0; r < v_lists.size(); ++r) {
     for (const auto& f : v_lists[r]) {
       Tri c{};
@@ -257,7 +238,6 @@ void AssembledSurface::assemble(std::span<const std::vector<SurfaceFace>> v_list
     face_end[r] = corners.size();
     release(r);
   }
-  rss_trace2("pass1");
   const std::size_t nk = d.keys.size();
   std::vector<std::int32_t> ring;
   // Appends the vertices strictly inside edge (a, b) that are surface vertices, in order.
@@ -297,14 +277,11 @@ void AssembledSurface::assemble(std::span<const std::vector<SurfaceFace>> v_list
     d.root_end[r] = d.triangles.size();
     corners.release_before(f);
   }
-  rss_trace2("pass2");
   corners.clear();
   d.keys.release_table();  // the split needs no look-up: free the table first
-  rss_trace2("released");
   const std::size_t nv = d.vertex_count();
   const auto copies = fans_to_copy(d.triangles, nv, [&d](std::size_t i) { return d.position(i); },
                                    std::max<std::size_t>(options.star_batch_corners, 1));
-  rss_trace2("split");
   d.copy_source.reserve(copies.size());
   for (const auto& c : copies) {
     const auto index = static_cast<std::int32_t>(d.vertex_count());
