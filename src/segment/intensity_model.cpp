@@ -70,7 +70,9 @@ IntensityModel estimate_intensity_model(const image::Volume<float>& ct, const st
                                         const IntensityEstimateOptions& options, const image::Volume<float>& smoothed,
                                         double smoothing_sigma_mm) {
   IntensityModel m = estimate_intensity_model(ct, seeds_mm, options);
-  if (!(options.residual_ball_factor > 0) || !(smoothing_sigma_mm > 0)) return m;
+  const bool replace = options.residual_ball_factor > 0;
+  const double factor = replace ? options.residual_ball_factor : options.residual_floor_ball_factor;
+  if (!(factor > 0) || !(smoothing_sigma_mm > 0)) return m;
   if (!smoothed.same_grid(ct)) throw InvalidInput("intensity model: the smoothed image is not on the CT's grid");
   const double unit = residual_sigma_per_unit_noise(ct.spacing(), smoothing_sigma_mm);
   if (!(unit > 1e-3)) return m;
@@ -80,7 +82,7 @@ IntensityModel estimate_intensity_model(const image::Volume<float>& ct, const st
   const auto organ_like = [&](std::int64_t i, std::int64_t j, std::int64_t k) {
     return smoothed.contains(i, j, k) && std::abs(double(smoothed(i, j, k)) - m.reference) <= keep;
   };
-  const double radius = options.residual_ball_factor * seed_ball_radius(ct, options);
+  const double radius = factor * seed_ball_radius(ct, options);
   std::vector<double> residuals;
   for (const Vec3& s : seeds_mm)
     image::for_each_voxel_in_ball(ct, s, radius, [&](std::int64_t i, std::int64_t j, std::int64_t k) {
@@ -91,7 +93,8 @@ IntensityModel estimate_intensity_model(const image::Volume<float>& ct, const st
     });
   if (residuals.size() < options.residual_min_voxels) return m;
   const double sigma = image::robust_stats(std::move(residuals)).sigma() / unit;
-  m.tolerance = tolerance_from_sigma(sigma, m.reference, options);
+  const double residual_tolerance = tolerance_from_sigma(sigma, m.reference, options);
+  m.tolerance = replace ? residual_tolerance : std::max(m.tolerance, options.residual_floor_fraction * residual_tolerance);
   return m;
 }
 

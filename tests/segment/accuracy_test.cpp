@@ -210,7 +210,7 @@ INSTANTIATE_TEST_SUITE_P(AllKinds, PhantomAccuracy, ::testing::ValuesIn(all_case
                          });
 
 // The leak phantoms at the accuracy suite's noise (20 % of the contrast) and blur (0.7 voxel),
-// draw 1, one seed, the organ choice only: with leak control and without.
+// draw 1 (IDO_PHANTOM_NOISE_SEED=N: draw N), one seed, the organ choice only: with leak control and without.
 struct PhantomRun {
   SegmentationScores guarded, flooded;
   BalloonReport report;
@@ -219,6 +219,8 @@ PhantomRun run_phantom(PhantomKind kind, Organ organ) {
   PhantomOptions po;
   po.blur_voxels = 0.7;
   po.noise_hu = 0.2 * make_phantom(kind).contrast_hu;
+  // IDO_PHANTOM_NOISE_SEED=N: another draw, as for the suite above.
+  if (const char* env = std::getenv("IDO_PHANTOM_NOISE_SEED")) po.seed = std::strtoull(env, nullptr, 10);
   const Phantom ph = make_phantom(kind, po);
   BalloonOptions o = organ_options(organ);
   const BalloonResult with = segment_balloon(ph.ct_hu, {ph.seeds_mm.front()}, o);

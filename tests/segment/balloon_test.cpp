@@ -82,7 +82,8 @@ TEST(IntensityModel, RobustEstimateFromSeedNeighbourhood) {
 
 // The residual second pass of the noise estimate: on white noise inside a sphere whose
 // wall lies within the big ball (anisotropic case), every draw's tolerance is near the
-// true 2.5 σ, and the spread over draws is smaller than the seed ball's alone.
+// true 2.5 σ, and the spread over draws is smaller than the seed ball's alone; as the
+// default's floor it lifts only the seed ball's estimates below its fraction.
 TEST(IntensityModel, ResidualSecondPassRecoversWhiteNoiseWithLessSpread) {
   const double sigma = 60.0, truth = 2.5 * sigma;
   for (const Vec3& spacing : {Vec3(1, 1, 1), Vec3(0.9, 0.9, 1.4)}) {
@@ -99,6 +100,14 @@ TEST(IntensityModel, ResidualSecondPassRecoversWhiteNoiseWithLessSpread) {
       o.residual_ball_factor = 5;
       const double second = estimate_intensity_model(s.ct, {c}, o, smoothed, smoothing_mm).tolerance;
       EXPECT_TRUE(test::rel_near(second, truth, 0.12)) << spacing.transpose() << " seed " << seed << ": " << second;
+      // The default keeps the first pass, floored at a fraction of the residual's (same ball
+      // factor, so the same residual): never below that fraction of the truth, less its spread.
+      o.residual_ball_factor = 0;
+      const double floored = estimate_intensity_model(s.ct, {c}, o, smoothed, smoothing_mm).tolerance;
+      EXPECT_DOUBLE_EQ(floored, std::max(first, o.residual_floor_fraction * second));
+      EXPECT_GE(floored, o.residual_floor_fraction * (1 - 0.12) * truth);
+      o.residual_floor_ball_factor = 0;
+      EXPECT_DOUBLE_EQ(estimate_intensity_model(s.ct, {c}, o, smoothed, smoothing_mm).tolerance, first);
       worst_first = std::max(worst_first, std::abs(first / truth - 1));
       worst_second = std::max(worst_second, std::abs(second / truth - 1));
     }

@@ -41,9 +41,21 @@ struct IntensityEstimateOptions {
   /// draws than the first ball's MAD. The scaling assumes uncorrelated noise: in a real
   /// scan, whose noise is correlated over neighbouring voxels, the residual is smaller and
   /// the band too narrow (vmtk-aorta: 272 → 106, Dice within its section 0.95 → 0.75), so it
-  /// is off by default; `ido segment --white-noise` turns it on (5). Measured:
+  /// does not replace the first pass by default (it is a floor under it, below);
+  /// `ido segment --white-noise` makes it replace it (5). Measured:
   /// bench/results/segment-seeds.md. 0 = first pass only.
   double residual_ball_factor = 0.0;
+  /// When residual_ball_factor is 0 (the default), the same residual pass in a ball this
+  /// many times the first radius still runs, as a floor: the tolerance is at least
+  /// residual_floor_fraction × the residual's. A seed ball whose MAD came out far below the
+  /// organ's noise (one draw in twenty of the vein-in-parenchyma phantom: 15 HU where 2.5 σ
+  /// is 38) no longer narrows the band until the front stalls in its own noise and floods
+  /// past it. The fraction lets through the first pass's ordinary spread and lifts only
+  /// estimates clearly too low; on a real scan, whose correlated noise makes the residual
+  /// small, the first pass stays (the shared scans: bench/results/segment-seeds.md).
+  /// 0 = no floor.
+  double residual_floor_ball_factor = 5.0;
+  double residual_floor_fraction = 0.8;  ///< see residual_floor_ball_factor
   std::size_t residual_min_voxels = 64;  ///< fewer interior voxels: keep the first pass
 };
 
@@ -57,8 +69,9 @@ struct IntensityEstimateOptions {
                                                       const IntensityEstimateOptions& options = {});
 
 /// As above, then the residual second pass of IntensityEstimateOptions::residual_ball_factor
-/// on @p smoothed, which must be @p ct smoothed by an isotropic Gaussian of
-/// @p smoothing_sigma_mm (gaussian_smooth's default truncation) on the same grid.
+/// (or, when that is 0, the floor of residual_floor_ball_factor) on @p smoothed, which must
+/// be @p ct smoothed by an isotropic Gaussian of @p smoothing_sigma_mm (gaussian_smooth's
+/// default truncation) on the same grid.
 /// @throws ido::InvalidInput also when @p smoothed is not on @p ct's grid.
 [[nodiscard]] IntensityModel estimate_intensity_model(const image::Volume<float>& ct,
                                                       const std::vector<Vec3>& seeds_mm,
