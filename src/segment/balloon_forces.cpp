@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "ido/core/error.h"
@@ -344,9 +345,20 @@ std::optional<double> plateau_wall_offset(const image::Volume<float>& smoothed, 
   thread_local std::vector<double> samples;  // kept per thread (called per vertex and step)
   samples.resize(fitter.sample_count());
   for (std::size_t k = 0; k < samples.size(); ++k) samples[k] = smoothed.sample(p + normal * fitter.sample_offset_mm(k));
+  auto accepted = [&](double level) { return intensity_departure(level, model) <= model.tolerance; };
+  // A valley outward (a disc or a joint gap between two bones): the profile falls and rises
+  // again by more than a tolerance, into the band, within the window. Three plateaus then
+  // read the neighbour's bright plate as part of the surroundings and put the wall into the
+  // gap (the vertebra-stack phantom's discs: 1.5 mm outward, against 0.5 mm for the half-way
+  // level); the half-way level is left to stand.
+  double lowest = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < samples.size(); ++k) {
+    if (fitter.sample_offset_mm(k) < 0) continue;
+    lowest = std::min(lowest, samples[k]);
+    if (samples[k] - lowest > model.tolerance && accepted(samples[k])) return std::nullopt;
+  }
   const auto f = fitter.fit(samples);
   if (!f) return std::nullopt;
-  auto accepted = [&](double level) { return intensity_departure(level, model) <= model.tolerance; };
   if (!accepted(f->levels[0])) return std::nullopt;
   if (!accepted(f->levels[1])) return f->inner_mm;
   if (!accepted(f->levels[2])) return f->outer_mm;

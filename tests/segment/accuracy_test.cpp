@@ -242,12 +242,14 @@ TEST(LeakPhantoms, ValveChamberStopsAtTheValve) {
 TEST(LeakPhantoms, VertebraStackKeepsTheSeededVertebra) {
   const PhantomRun r = run_phantom(PhantomKind::VertebraStack, Organ::Vertebra);
   EXPECT_GT(r.flooded.volume_ratio, 2.0);  // without: all three (measured 3.45)
-  EXPECT_GE(r.guarded.dice, 0.92);         // measured 0.937 (the discs' blurred rims are the excess)
-  EXPECT_LT(r.guarded.volume_ratio, 1.2);
+  // Measured 0.9635 (0.937 when the three-plateau wall read the neighbour's end plate beyond a
+  // disc as surroundings and put the wall 1.5 mm into the disc); 0.958-0.964 over 20 draws.
+  EXPECT_GE(r.guarded.dice, 0.95);
+  EXPECT_LT(r.guarded.volume_ratio, 1.1);
   EXPECT_TRUE(r.report.closed && r.report.manifold);
-  // The truth's Euler number is 0 (the ring around the canal); the surface has −2 at this draw,
-  // a second handle where a facet plate meets the arch: a known miss (docs/segmentation.md), not
-  // asserted here.
+  // The ring around the canal (Euler 0); one draw in 20 has −2, a second handle where a facet
+  // plate meets the arch (docs/segmentation.md).
+  EXPECT_EQ(r.report.euler_characteristic, 0);
   EXPECT_EQ(r.report.neighbour_markers_mm.size(), 2u);
 }
 

@@ -237,6 +237,28 @@ TEST(PlateauFit, ThinCortexWallIsItsOuterEdgeNotTheHalfWayLevel) {
   EXPECT_FALSE(plateau_wall_offset(step, Vec3(14.0, 1.5, 1.5), Vec3::UnitX(), vessel, fitter).has_value());
 }
 
+TEST(PlateauFit, ADiscBetweenTwoEndPlatesIsLeftToTheHalfWayLevel) {
+  // Two vertebral bodies: marrow (250) up to x = 8.5, an end plate (1200) up to x = 10, a
+  // 3.5-voxel disc (80), the neighbour's end plate from x = 13.5 to 15, its marrow beyond;
+  // σ = 1 voxel. The profile falls into the disc and rises again into the band: the three
+  // plateaus would read the neighbour's plate as surroundings, so no plateau wall is given,
+  // and the half-way level lies between the true wall and the disc's middle (x = 11.75).
+  const auto v = blurred_layers({8.5, 10.0, 13.5, 15.0}, {250, 1200, 80, 1200, 250}, 1.0);
+  IntensityModel bone{250, 100};
+  bone.accept_brighter = true;
+  const PlateauProfileFitter fitter(std::sqrt(1.0 + 1.0 / 6.0), 0.2, 4.4, 2.0, 0.1, 0.5);
+  for (double x0 : {9.6, 10.4, 11.0}) {
+    EXPECT_FALSE(plateau_wall_offset(v, Vec3(x0, 1.5, 1.5), Vec3::UnitX(), bone, fitter).has_value()) << x0;
+    const auto half_way = edge_offset_along_normal(v, Vec3(x0, 1.5, 1.5), Vec3::UnitX(), bone, 2.0, 0.2, 25.0, 1.0);
+    ASSERT_TRUE(half_way.has_value()) << x0;
+    EXPECT_GT(x0 + *half_way, 10.0) << x0;
+    EXPECT_LT(x0 + *half_way, 11.2) << x0;
+  }
+  // The same plate with soft tissue beyond (no neighbour): the plateau wall is read.
+  const auto lone = blurred_layers({8.5, 10.0}, {250, 1200, 80}, 1.0);
+  EXPECT_TRUE(plateau_wall_offset(lone, Vec3(10.4, 1.5, 1.5), Vec3::UnitX(), bone, fitter).has_value());
+}
+
 TEST(PlateauFit, ThinGapToBoneIsReadAtTheVesselWall) {
   // Vessel (350) up to x = 10, one voxel of soft tissue (40), a 2-voxel cortex (1200), marrow
   // (250), blurred by σ = 1 voxel: the blurred bone fills the gap, and the band's exit lies
