@@ -146,11 +146,7 @@ void run(const SegmentCliOptions& o, const GlobalOptions& g) {
   if (o.calcium && !std::isfinite(*o.calcium)) throw InvalidInput("--calcium must be a finite intensity");
   if (!(o.calcium_reach_mm > 0) || !std::isfinite(o.calcium_reach_mm))
     throw InvalidInput(fmt::format("--calcium-reach must be a positive length in mm, got {}", o.calcium_reach_mm));
-  const std::string ext = std::filesystem::path(o.output).extension().string();
-  if (ext != ".stl" && ext != ".ply" && ext != ".obj" && ext != ".vtp")
-    throw InvalidInput(fmt::format("{}: the surface output must be .stl, .ply, .obj or .vtp", o.output));
-  if (!o.mask.empty() && !io::looks_like_volume(o.mask))
-    throw InvalidInput(fmt::format("{}: the mask output must be a volume file (.nii, .nii.gz, .nrrd, .mha)", o.mask));
+  view::check_segment_outputs({o.output, o.mask, o.report});
   std::optional<SnapshotWriter> writer;
   if (!o.snapshots.empty()) {
     if (o.snapshot_every < 0) throw InvalidInput(fmt::format("--snapshot-every must be >= 1, got {}", o.snapshot_every));
@@ -217,7 +213,7 @@ void run(const SegmentCliOptions& o, const GlobalOptions& g) {
   if (!o.mask.empty()) io::write_volume(o.mask, segment::surface_to_mask(r.surface, ct));
   const segment::BalloonReport& rep = r.report;
   if (!o.report.empty()) {
-    io::Json j = view::segment_report_json({o.input, seeds, organ, bo}, r, {o.output, o.mask, o.report});
+    io::Json j = io::segment_report({o.input, seeds, organ, bo}, r, o.output, o.mask);
     if (calcified)
       j["calcification"] = {{"threshold", *o.calcium},
                             {"reach_mm", o.calcium_reach_mm},

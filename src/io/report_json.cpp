@@ -129,4 +129,25 @@ json to_json(const sim::EnergyReport& e) {
           {"per_model", per_model}};
 }
 
+json segment_report(const segment::SegmentRequest& request, const segment::BalloonResult& result,
+                    const std::filesystem::path& surface, const std::filesystem::path& mask) {
+  const segment::BalloonOptions& bo = request.options;
+  const auto points = [](const std::vector<Vec3>& ps) {
+    json out = json::array();
+    for (const Vec3& p : ps) out.push_back(vec(p));
+    return out;
+  };
+  json j = {{"input", request.input},
+            {"seeds_mm", points(request.seeds_mm)},
+            {"organ", segment::organ_name(request.organ)},
+            {"edge_reach_voxels", bo.edge_reach_voxels},
+            {"outside_level", bo.outside_level ? json(*bo.outside_level) : json(nullptr)}};
+  j.update(to_json(result.report));  // the balloon's figures, as every report writes them
+  // The region of interest (null: none); the stop points and radius bound are the balloon's.
+  j["roi_mm"] = bo.roi_mm ? points({bo.roi_mm->min, bo.roi_mm->max}) : json(nullptr);
+  j["surface"] = surface.empty() ? json(nullptr) : json(surface.string());
+  j["mask"] = mask.empty() ? json(nullptr) : json(mask.string());
+  return j;
+}
+
 }  // namespace ido::io

@@ -16,6 +16,7 @@
 #include "ido/core/atomic_file.h"
 #include "ido/core/error.h"
 #include "ido/core/statistics.h"
+#include "ido/geometry/aabb.h"
 #include "ido/geometry/tet_quality.h"
 #include "ido/io/mesh_io.h"
 #include "ido/io/pvd.h"
@@ -213,16 +214,9 @@ geometry::TetMesh read_body_mesh(const Reader& r, const json& j, const std::stri
   r.fail(ptr + "/generator", "unknown generator '" + gen + "' (known: beam, cube, sphere)");
 }
 
-struct Box {
-  Vec3 lo, hi;
-  [[nodiscard]] bool contains(const Vec3& p) const {
-    return (p.array() >= lo.array()).all() && (p.array() <= hi.array()).all();
-  }
-};
-
-Box read_box(const Reader& r, const json& j, const std::string& ptr) {
-  Box b{r.vec3(j, ptr, "box_min_mm"), r.vec3(j, ptr, "box_max_mm")};
-  if (!(b.lo.array() <= b.hi.array()).all()) r.fail(ptr + "/box_max_mm", "must be >= box_min_mm in every axis");
+geometry::Aabb read_box(const Reader& r, const json& j, const std::string& ptr) {
+  const geometry::Aabb b{r.vec3(j, ptr, "box_min_mm"), r.vec3(j, ptr, "box_max_mm")};
+  if (!(b.min.array() <= b.max.array()).all()) r.fail(ptr + "/box_max_mm", "must be >= box_min_mm in every axis");
   return b;
 }
 
@@ -386,7 +380,7 @@ void add_body(Scene& scene, const Reader& r, const json& jb, const std::string& 
         }
     } else {
       r.object(jf, fp, {"box_min_mm", "box_max_mm"});
-      const Box b = read_box(r, jf, fp);
+      const geometry::Aabb b = read_box(r, jf, fp);
       for (std::size_t i = 0; i < nv; ++i)
         if (b.contains(body.rest_mesh.vertices[i])) {
           world.particles().set_fixed(static_cast<std::size_t>(first) + i, true);
@@ -403,7 +397,7 @@ void add_body(Scene& scene, const Reader& r, const json& jb, const std::string& 
     const std::string type = r.string(jl, lp, "type");
     if (type == "point") {
       r.object(jl, lp, {"type", "box_min_mm", "box_max_mm", "force_n"});
-      const Box b = read_box(r, jl, lp);
+      const geometry::Aabb b = read_box(r, jl, lp);
       const Vec3 f = r.vec3(jl, lp, "force_n");
       std::vector<std::int32_t> sel;
       for (std::size_t i = 0; i < nv; ++i)
@@ -412,7 +406,7 @@ void add_body(Scene& scene, const Reader& r, const json& jb, const std::string& 
       for (auto i : sel) world.external().point_loads.push_back({i, f / static_cast<double>(sel.size())});
     } else if (type == "surface") {
       r.object(jl, lp, {"type", "box_min_mm", "box_max_mm", "traction_pa"});
-      const Box b = read_box(r, jl, lp);
+      const geometry::Aabb b = read_box(r, jl, lp);
       const Vec3 t = r.vec3(jl, lp, "traction_pa") * sim::kPascalToNPerMm2;   // N/mm²
       std::vector<Vec3> nodal(nv, Vec3::Zero());
       bool any = false;

@@ -4,16 +4,20 @@
 #include "ido/io/report_json.h"
 
 #include <fstream>
+#include <memory>
 #include <sstream>
 #include <string>
 
 #include <gtest/gtest.h>
 
+#include "ido/geometry/aabb.h"
 #include "ido/geometry/mesh_checks.h"
 #include "ido/io/mesh_io.h"
 #include "ido/segment/balloon.h"
+#include "ido/segment/organ.h"
 #include "ido/segment/phantom.h"
 #include "ido/sim/generators.h"
+#include "support/ball_ct.h"
 #include "support/test_support.h"
 
 namespace ido {
@@ -107,6 +111,34 @@ TEST(ReportJson, InfoChecksAreTheLibrarysForm) {
   const io::Json info = io::Json::parse(r.out);
   // The STL stores float coordinates: compare with the checks of the mesh as read back.
   EXPECT_EQ(info["checks"], io::to_json(geometry::check_mesh(io::read_triangle_mesh(stl))));
+}
+
+TEST(ReportJson, SegmentReportRecordsTheRequestAndTheSurfaceFigures) {
+  const auto ct = std::make_shared<const image::Volume<float>>(test::ball_ct());
+  const std::vector<Vec3> seeds = {ct->index_to_world(Vec3(16, 15, 14))};
+  segment::SegmentRequest request{"ct.nii.gz", seeds, segment::Organ::Artery, segment::organ_options(segment::Organ::Artery)};
+  const segment::BalloonResult r = segment::segment_balloon(*ct, seeds, request.options);
+  const io::Json j = io::segment_report(request, r, "s.stl", "");
+  EXPECT_EQ(j["seeds_mm"][0][0].get<double>(), seeds[0].x());
+  EXPECT_EQ(j["seeds_mm"][0][2].get<double>(), seeds[0].z());
+  EXPECT_EQ(j["organ"], "artery");
+  EXPECT_EQ(j["triangles"].get<std::int64_t>(), std::int64_t(r.surface.triangle_count()));
+  EXPECT_EQ(j["surface"], "s.stl");
+  EXPECT_TRUE(j["mask"].is_null());
+  EXPECT_TRUE(j["leak_control"]["stop_points_mm"].empty());
+  EXPECT_TRUE(j["leak_control"]["max_radius_mm"].is_null());
+  EXPECT_TRUE(j["roi_mm"].is_null());
+  // The stop points and radius bound the balloon ran with are listed with the leak control's
+  // figures (from its report); the region of interest from the request.
+  segment::BalloonResult with_controls = r;
+  with_controls.report.stop_points_mm = {Vec3(1.5, -2.25, 40.125)};
+  with_controls.report.max_radius_mm = 7.5;
+  request.options.roi_mm = geometry::Aabb{Vec3(-1, -2, -3), Vec3(4, 5, 6)};
+  const io::Json with_stop = io::segment_report(request, with_controls, "", "");
+  EXPECT_EQ(with_stop["leak_control"]["stop_points_mm"], io::Json::parse("[[1.5, -2.25, 40.125]]"));
+  EXPECT_EQ(with_stop["leak_control"]["max_radius_mm"].get<double>(), 7.5);
+  EXPECT_EQ(with_stop["roi_mm"], io::Json::parse("[[-1, -2, -3], [4, 5, 6]]"));
+  expect_documented(j, reports_doc(), "segment report");
 }
 
 }  // namespace

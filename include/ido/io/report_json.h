@@ -1,11 +1,14 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
+#include <filesystem>
+
 #include <nlohmann/json.hpp>
 
 #include "ido/geometry/mesh_checks.h"
 #include "ido/geometry/tet_quality.h"
 #include "ido/segment/balloon.h"
 #include "ido/segment/metrics.h"
+#include "ido/segment/organ.h"
 #include "ido/sim/diagnostics.h"
 
 namespace ido::io {
@@ -30,6 +33,13 @@ using Json = nlohmann::ordered_json;
 /// What a balloon run did: its intensity model, steps, time per phase, surface figures,
 /// stop reason and leak control.
 [[nodiscard]] Json to_json(const segment::BalloonReport& report);
+/// A segmentation's report: the request (input, seeds, organ, edge reach, outside level, region
+/// of interest `roi_mm` [[min], [max]], null when not set), to_json of the balloon's report (with
+/// the leak control's stop points and radius bound) and the output names ("surface", "mask":
+/// null when empty). The document `ido segment --report` writes (which adds its calcification and
+/// snapshot keys) and the workbench saves.
+[[nodiscard]] Json segment_report(const segment::SegmentRequest& request, const segment::BalloonResult& result,
+                                  const std::filesystem::path& surface, const std::filesystem::path& mask);
 /// Kinetic, gravitational and elastic energy (total and per model), mJ.
 [[nodiscard]] Json to_json(const sim::EnergyReport& report);
 

@@ -53,4 +53,12 @@ struct BalloonChoices {
 [[nodiscard]] BalloonOptions balloon_options(const BalloonChoices& choices,
                                              const std::function<std::string(std::string_view)>& option_name = {});
 
+/// How a segmentation was asked for, as its report records it (io::segment_report).
+struct SegmentRequest {
+  std::string input;               ///< the CT's file name as given
+  std::vector<Vec3> seeds_mm;      ///< world positions (mm)
+  Organ organ = Organ::Generic;
+  BalloonOptions options;          ///< the options the balloon ran with
+};
+
 }  // namespace ido::segment
