@@ -234,6 +234,10 @@ void run(const SegmentCliOptions& o, const GlobalOptions& g) {
                 static_cast<long long>(rep.euler_characteristic), rep.volume_mm3, rep.area_mm2,
                 rep.closed ? "closed" : "OPEN", rep.manifold ? "manifold" : "NON-MANIFOLD",
                 static_cast<long long>(rep.self_intersections));
+    if (bo.outside_level && !rep.outside_level)
+      std::printf("note: the organ's level %.1f lies within half its tolerance of the outside level %g (no contrast): "
+                  "the outside level was not used\n",
+                  rep.model.reference, *bo.outside_level);
     if (calcified)
       std::printf("calcification above %g: %lld plaque voxels (%.1f mm3) added\n", *o.calcium,
                   static_cast<long long>(calcified->plaque_voxels), calcified->plaque_volume_mm3);

@@ -79,6 +79,7 @@ json to_json(const segment::BalloonReport& r) {
   return {{"reference", r.model.reference},
           {"tolerance", r.model.tolerance},
           {"accept_brighter", r.model.accept_brighter},
+          {"outside_level_used", r.outside_level ? json(*r.outside_level) : json(nullptr)},
           {"iterations", r.iterations},
           {"leak_control",
            {{"seed_radius_mm", r.seed_radius_mm},

@@ -10,9 +10,12 @@
 #include <map>
 #include <string>
 
+#include <fmt/format.h>
+
 #include "ido/core/error.h"
 #include "ido/core/log.h"
 #include "ido/core/parallel.h"
+#include "ido/image/index_box.h"
 #include "ido/geometry/mesh_checks.h"
 #include "ido/geometry/self_intersection.h"
 #include "ido/image/filters.h"
@@ -87,6 +90,7 @@ struct Balloon::State {
   image::Volume<float> smoothed;
   image::Volume<float> gradient_mm;  // |∇ smoothed| (intensity per mm), the vessels' edge stop
   IntensityModel model;
+  std::optional<double> outside_level;  // BalloonOptions::outside_level, unless not set apart (see the constructor)
   double h = 1.0;  // smallest spacing (mm)
   std::vector<Vec3> seeds_mm;  // a repair keeps the components holding one of them
   sim::Particles particles;
@@ -462,7 +466,7 @@ struct Balloon::State {
             if (searched[i] != 2) {
               searched[i] = 1;
               t = edge_offset_along_normal(smoothed, x[i], nrm, model, search, 0.2 * h, min_rise, h, background_departure,
-                                           opt.outside_level);
+                                           outside_level);
               if (t && model.accept_brighter) {
                 // Bone: the outer fall of a thin cortex that the blur has lowered is read by the
                 // three-plateau fit (marrow, cortex, surroundings), not at the half-way level.
@@ -672,9 +676,33 @@ Balloon::Balloon(const image::Volume<float>& ct, const std::vector<Vec3>& seeds_
   m->model.tolerance = options.tolerance ? *options.tolerance : est.tolerance;
   // An estimated band that reaches past half-way to the tissue bounding the organ would take
   // that tissue too (a wide seed ball in low-contrast bone reaching down to muscle): cap it there.
+  // A vessel whose level lies within half its estimated tolerance of that tissue's is not set
+  // apart from it (a non-contrast scan's aorta: 42 HU against 40): its lumen cannot be read
+  // against the wall, and the cap would leave a band of 1 HU that holds not even the seed, so
+  // the outside level is not used at all and the run says so (BalloonReport::outside_level).
+  m->outside_level = options.outside_level;
   if (!options.tolerance && options.outside_level) {
     const double half_way = 0.5 * std::abs(m->model.reference - *options.outside_level);
-    if (half_way > 0 && half_way < m->model.tolerance) m->model.tolerance = half_way;
+    if (!options.accept_brighter && half_way < 0.5 * m->model.tolerance)
+      m->outside_level.reset();
+    else if (half_way > 0 && half_way < m->model.tolerance)
+      m->model.tolerance = half_way;
+  }
+  m->report.outside_level = m->outside_level;
+  // A seed outside its own band deflates its icosphere, which turns inside out and then grows
+  // without end: refuse it. The seed's voxels within a voxel of the icosphere are read.
+  const double r0 = options.seed_radius_voxels * ct.spacing().mean();
+  for (const Vec3& s : seeds_mm) {
+    bool in_band = false;
+    image::for_each_voxel_in_ball(m->smoothed, s, r0 + m->h, [&](std::int64_t i, std::int64_t j, std::int64_t k) {
+      in_band = in_band || intensity_departure(m->smoothed(i, j, k), m->model) < m->model.tolerance;
+    });
+    if (!in_band)
+      throw InvalidInput(fmt::format("balloon: the seed at ({:.2f}, {:.2f}, {:.2f}) mm reads {:.1f} after smoothing, "
+                                     "outside the band {:.1f} +/- {:.1f} it inflates in: move the seed into the "
+                                     "organ or give a reference and tolerance that hold it",
+                                     s.x(), s.y(), s.z(), m->smoothed.sample(s), m->model.reference,
+                                     m->model.tolerance));
   }
   m->model.accept_brighter = options.accept_brighter;
   // Bone reads its edge stop along the normal from the smoothed image; only vessels need |∇I|.
@@ -706,7 +734,6 @@ Balloon::Balloon(const image::Volume<float>& ct, const std::vector<Vec3>& seeds_
   m->report.stop_points_mm = options.leak.stop_points_mm;
   m->report.max_radius_mm = options.leak.max_radius_mm;
   geometry::TriangleMesh all;
-  const double r0 = options.seed_radius_voxels * ct.spacing().mean();
   for (const Vec3& s : seeds_mm) {
     const auto ico = balloon_icosphere(s, r0, 2);
     const auto base = static_cast<std::int32_t>(all.vertices.size());
@@ -739,6 +766,11 @@ bool Balloon::step() {
     // Frozen vertices thaw once the repair rebuilt the surface; unfreeze any left.
   }
   const double vol = s.volume();
+  // A surface inside out (its seed region deflated through itself) would grow without end.
+  if (vol < 0)
+    throw InvalidInput(fmt::format("balloon: the surface turned inside out at step {} (the seed region lies outside "
+                                   "the band {:.1f} +/- {:.1f}): move the seed or give a reference and tolerance",
+                                   s.iteration, s.model.reference, s.model.tolerance));
   if (vol > s.opt.max_volume_mm3) {
     s.done = true;
     s.report.leak_warning = true;

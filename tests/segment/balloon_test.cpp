@@ -245,5 +245,51 @@ TEST(Balloon, WorkLimitStopsAFloodAndSaysSo) {
   EXPECT_TRUE(r.report.closed && r.report.manifold);
 }
 
+
+// A seed outside its own band deflates its icosphere, which turns inside out and then grows
+// without end (a non-contrast aorta with the artery organ's outside level used to end at
+// -18 litres and 3 million self-intersections after 40 s): it is refused with a clear error.
+TEST(Balloon, ASeedOutsideItsOwnBandIsRefused) {
+  const Vec3 c(16.2, 15.7, 16.4);
+  const auto s = make_volume({33, 33, 33}, Vec3(1, 1, 1), [&](const Vec3& p) { return (p - c).norm() < 8.0; }, 300.0, 10.0);
+  BalloonOptions o;
+  o.reference = 100;  // the ball reads 300, its surroundings 0: the band 100 +/- 20 holds neither
+  o.tolerance = 20;
+  try {
+    (void)Balloon(s.ct, {Vec3(16, 16, 16)}, o);
+    ADD_FAILURE() << "no error";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("outside the band 100.0 +/- 20.0"), std::string::npos) << e.what();
+  }
+  o.reference = 300;  // the same seed in a band that holds it inflates
+  EXPECT_NO_THROW((void)Balloon(s.ct, {Vec3(16, 16, 16)}, o));
+}
+
+// A vessel whose level lies at the bounding tissue's (a non-contrast aorta: about 40 HU, as
+// soft tissue) is not set apart from it: the organ's outside level is not used, so the
+// estimated band is not capped to the 1 HU between the two levels (which held not even the
+// seed). A contrast vessel keeps it.
+TEST(Balloon, AnOutsideLevelAtTheOrgansOwnLevelIsNotUsed) {
+  auto tube = [](const Vec3& p) { return std::hypot(p.x() - 16.3, p.y() - 15.8) < 5.0 && p.z() > 4 && p.z() < 28; };
+  BalloonOptions o;
+  o.outside_level = 40.0;
+  for (const double level : {42.0, 300.0}) {
+    // The tube at `level` in fat (-100); make_volume writes 0 outside, so shift by -100.
+    auto s = make_volume({33, 33, 33}, Vec3(1, 1, 1), tube, level + 100.0, 10.0);
+    for (float& v : s.ct.data()) v -= 100.0f;
+    const BalloonResult r = segment_balloon(s.ct, {Vec3(16, 16, 16)}, o);
+    expect_valid(r, 2);
+    EXPECT_GT(r.report.volume_mm3, 0.0);
+    EXPECT_GE(dice(surface_to_mask(r.surface, s.ct), s.truth), 0.9) << level;
+    if (level < 100) {
+      EXPECT_FALSE(r.report.outside_level.has_value());
+      EXPECT_GT(r.report.model.tolerance, 15.0);  // about 2.5 noise sigmas, not half of 2 HU
+    } else {
+      ASSERT_TRUE(r.report.outside_level.has_value());
+      EXPECT_EQ(*r.report.outside_level, 40.0);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace ido::segment

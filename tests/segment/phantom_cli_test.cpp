@@ -119,8 +119,11 @@ TEST(SegmentCli, OrganChoiceAndLeakEvents) {
   ASSERT_FALSE(report["leak_control"]["events"].empty());
   EXPECT_EQ(report["leak_control"]["events"][0]["cause"], "chamber");
   EXPECT_GT(report["leak_control"]["seed_radius_mm"].get<double>(), 3.0);
+  EXPECT_EQ(report["outside_level_used"].get<double>(), 40.0);  // a contrast vessel: used
+  // A band that does not hold the seed (its lumen reads about 300 HU) is refused in one line.
   for (const auto& [args, named] : {std::pair<std::string, std::string>{" --organ liver", "--organ"},
-                                    {" --max-iterations -1", "--max-iterations"}}) {
+                                    {" --max-iterations -1", "--max-iterations"},
+                                    {" --reference -500 --tolerance 20", "outside the band -500.0 +/- 20.0"}}) {
     const auto none = dir / "none.ply";
     r = test::run_tool("segment " + ct.string() + " --seed " + seed + " -o " + none.string() + args);
     EXPECT_EQ(r.exit_code, 2) << args;

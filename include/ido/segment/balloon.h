@@ -137,6 +137,10 @@ struct BalloonOptions {
 /// What a balloon run did and what it produced.
 struct BalloonReport {
   IntensityModel model;             ///< reference and tolerance used
+  /// The bounding tissue's level the run used: BalloonOptions::outside_level, unset when none was
+  /// given or when the organ's level lies within half its estimated tolerance of it (not set
+  /// apart from that tissue: no contrast), where it is not used.
+  std::optional<double> outside_level;
   std::int64_t iterations = 0;      ///< inflation + edge steps
   double seconds = 0;               ///< wall-clock time of the run
   /// Where the wall-clock time went (s): set-up (smoothing, gradient, intensity model), the
