@@ -291,5 +291,28 @@ TEST(Balloon, AnOutsideLevelAtTheOrgansOwnLevelIsNotUsed) {
   }
 }
 
+
+// A surface that stays inside out stops the run: a seed in a dark last column of the grid whose
+// icosphere reaches the band only on one side (the old loop went on growing it inside out).
+TEST(Balloon, ASurfaceThatStaysInsideOutStopsTheRun) {
+  image::Volume<float> ct({20, 20, 20}, Vec3(1, 1, 1), Vec3::Zero(), Mat3::Identity(), 100.0f);
+  for (std::int64_t k = 0; k < 20; ++k)
+    for (std::int64_t j = 0; j < 20; ++j) ct(19, j, k) = 0.0f;
+  BalloonOptions o;
+  o.reference = 100;
+  o.tolerance = 20;
+  o.accept_brighter = true;
+  try {
+    (void)segment_balloon(ct, {Vec3(19, 10, 10)}, o);
+    ADD_FAILURE() << "no error";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("turned inside out"), std::string::npos) << e.what();
+  }
+  // One voxel in, the same band grows the block.
+  const BalloonResult r = segment_balloon(ct, {Vec3(17, 10, 10)}, o);
+  expect_valid(r, 2);
+  EXPECT_GT(r.report.volume_mm3, 0.8 * 19 * 20 * 20 * 0.9);
+}
+
 }  // namespace
 }  // namespace ido::segment
