@@ -685,7 +685,14 @@ Balloon::Balloon(const image::Volume<float>& ct, const std::vector<Vec3>& seeds_
   m->outside_level = options.outside_level;
   if (!options.tolerance && options.outside_level) {
     const double half_way = 0.5 * std::abs(m->model.reference - *options.outside_level);
-    if (!options.accept_brighter && half_way < 0.25 * m->model.tolerance)
+    // Bone is brighter than the soft tissue around it: a bone seed that reads as that tissue or
+    // darker is not in bone (a seed in ctpa's mediastinum with the vertebra choice: 45 HU, a
+    // band of 2.5 HU that turned the surface inside out; one in fat took the whole body).
+    if (options.accept_brighter && m->model.reference - *options.outside_level < 0.5 * m->model.tolerance)
+      throw InvalidInput(fmt::format("balloon: the seed region reads {:.1f}, not half its tolerance {:.1f} above the "
+                                     "bounding tissue's level {:g}: not bone; move the seed into the bone",
+                                     m->model.reference, m->model.tolerance, *options.outside_level));
+    if (half_way < 0.25 * m->model.tolerance)
       m->outside_level.reset();
     else if (half_way > 0 && half_way < m->model.tolerance)
       m->model.tolerance = half_way;

@@ -314,5 +314,29 @@ TEST(Balloon, ASurfaceThatStaysInsideOutStopsTheRun) {
   EXPECT_GT(r.report.volume_mm3, 0.8 * 19 * 20 * 20 * 0.9);
 }
 
+
+// Bone is brighter than the tissue bounding it: a bone seed (accept_brighter with an outside
+// level) that reads as that tissue or darker is refused before any work, as not bone; the same
+// options from a seed in the bright ball segment it.
+TEST(Balloon, ABoneSeedInSoftTissueIsRefused) {
+  const Vec3 c(16.2, 15.7, 16.4);
+  auto s = make_volume({33, 33, 33}, Vec3(1, 1, 1), [&](const Vec3& p) { return (p - c).norm() < 6.0; }, 300.0, 8.0);
+  for (float& v : s.ct.data()) v += 45.0f;  // soft tissue at 45 HU, the ball at 345
+  BalloonOptions o;
+  o.accept_brighter = true;
+  o.outside_level = 40.0;
+  for (const Vec3& seed : {Vec3(4, 4, 4), Vec3(28, 28, 5)}) {
+    try {
+      (void)Balloon(s.ct, {seed}, o);
+      ADD_FAILURE() << "no error";
+    } catch (const InvalidInput& e) {
+      EXPECT_NE(std::string(e.what()).find("not bone"), std::string::npos) << e.what();
+    }
+  }
+  const BalloonResult r = segment_balloon(s.ct, {c}, o);
+  expect_valid(r, 2);
+  EXPECT_GE(dice(surface_to_mask(r.surface, s.ct), s.truth), 0.9);
+}
+
 }  // namespace
 }  // namespace ido::segment
