@@ -247,7 +247,8 @@ void run(const SegmentCliOptions& o, const GlobalOptions& g) {
                   static_cast<long long>(e.iteration), e.neck_radius_mm);
     if (rep.stop_reason == "work_limit")
       std::printf("warning: stopped by the work limit while still growing: a leak the leak control did not stop; "
-                  "give a stop point or a region of interest\n");
+                  "give a stop point or a region of interest%s\n",
+                  o.bone && organ != segment::Organ::Vertebra ? " (for one vertebra of a spine: --organ vertebra)" : "");
     else if (rep.leak_warning)
       std::printf("warning: the volume was still growing when a safeguard stopped it (leak?)\n");
     if (writer) std::printf("%zu snapshots written to %s\n", writer->files().size(), o.snapshots.c_str());

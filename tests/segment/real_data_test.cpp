@@ -313,6 +313,24 @@ TEST(RealDataSpine, SeedsHalfAVoxelOffKeepTheirVertebra) {
   }
 }
 
+// A non-contrast vessel with the artery choice (issue 27's "non-contrast abdomen, seed in the
+// aorta"): abdomen-spine's aorta reads 42 HU, at the choice's soft-tissue level of 40, and the
+// band capped half-way to it (1 HU) did not hold the seed, whose surface turned inside out and
+// grew to -18 litres with 3 million self-intersections in 40 s. Now the outside level is not used,
+// and the run ends as the default's does: a valid surface, stopped by the work limit with the
+// leak warning (the soft tissue around the aorta is one mass at that level).
+TEST(RealDataSpine, NonContrastAortaWithTheArteryChoiceEndsValidAndWarned) {
+  IDO_REQUIRE_SHARED_DATA();
+  const Spine spine = load_spine();
+  const BalloonResult r = segment_balloon(spine.ct, {seed_mm(spine.ct, {0, {62, 55, 74}})}, organ_options(Organ::Artery));
+  EXPECT_FALSE(r.report.outside_level.has_value());
+  EXPECT_GT(r.report.model.tolerance, 20.0);
+  EXPECT_GT(r.report.volume_mm3, 0.0);
+  EXPECT_TRUE(r.report.closed && r.report.manifold);
+  EXPECT_EQ(r.report.self_intersections, 0);
+  EXPECT_TRUE(r.report.leak_warning);
+}
+
 // `--organ artery` is the lumen configuration that meets ctpa's target (kCtpaLumen).
 TEST(RealDataOrgan, ArteryIsTheLumenConfiguration) {
   const BalloonOptions a = organ_options(Organ::Artery);
