@@ -14,7 +14,12 @@
 
 namespace py = pybind11;
 
-PYBIND11_MODULE(ido, m) {
+// The extension is ido._ido, re-exported by the package's __init__.py. Its classes are named
+// while the module calls itself "ido", so that they are ido.Volume, ido.World, ... (in
+// signatures and type names), as users import them; the name is restored afterwards.
+PYBIND11_MODULE(_ido, m) {
+  const py::object own_name = m.attr("__name__");
+  m.attr("__name__") = "ido";
   m.doc() =
       "ido: computer-assisted surgery toolkit (Turini et al. 2007) — volumes and meshes as numpy arrays, balloon "
       "segmentation, phantoms and accuracy metrics, marching cubes and tetrahedral meshing, and the deformable-"
@@ -37,4 +42,5 @@ PYBIND11_MODULE(ido, m) {
   ido::python::bind_mesh(m);
   ido::python::bind_segment(m);
   ido::python::bind_sim(m);
+  m.attr("__name__") = own_name;
 }

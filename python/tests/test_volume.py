@@ -2,6 +2,7 @@
 """ido.Volume / ido.Mask: numpy layout, geometry, file round trips, errors."""
 import gc
 import math
+import os
 
 import numpy as np
 import pytest
@@ -121,3 +122,17 @@ def test_read_mask_by_nonzero_label_and_level(tmp_path):
     np.testing.assert_array_equal(ido.read_mask(tmp_path / "l.nrrd", below=0.0).array, (labels < 0).astype(np.uint8))
     with pytest.raises(ValueError, match="not both"):
         ido.read_mask(tmp_path / "l.nrrd", label=1, below=0.0)
+
+
+def test_the_package_is_typed_and_its_names_are_ido_names():
+    # PEP 561: a typed distribution is a package with a py.typed marker; the stubs sit beside
+    # the extension, and every class is named as users import it (ido.Volume, not ido._ido.Volume).
+    folder = os.path.dirname(ido.__file__)
+    assert os.path.basename(folder) == "ido"
+    assert os.path.isfile(os.path.join(folder, "py.typed"))
+    assert os.path.isfile(os.path.join(folder, "__init__.pyi"))
+    for cls in (ido.Volume, ido.Mask, ido.TriangleMesh, ido.TetMesh, ido.World, ido.Segmentation):
+        assert cls.__module__ == "ido"
+        assert repr(cls) == f"<class 'ido.{cls.__name__}'>"
+    assert "ct: ido.Volume" in ido.segment.__doc__
+    assert ido.__version__
