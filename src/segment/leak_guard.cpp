@@ -385,10 +385,15 @@ LeakGuard::LeakGuard(const image::Volume<float>& smoothed, const IntensityModel&
       for (std::size_t l : mine) push(l, 1);
       for (std::size_t l : neighbour_lines) push(l, 2);
       const Vec3 sp = smoothed.spacing();
+      // A vertebra lies within reach of its seed: past 3 x neighbour_search_mm of steps from every
+      // marker nothing is the seed's (a bone band that takes in a whole MRA or a contrast scan's
+      // vessels no longer has the competition visit all of it).
+      const auto reach_mm = float(3.0 * o.neighbour_search_mm);
       while (!heap.empty()) {
         const auto [dl, l] = heap.top();
         heap.pop();
         if (dl > dist[l]) continue;
+        if (dl > reach_mm) break;
         const Index3 c = g.ijk(l);
         for (int dk = -1; dk <= 1; ++dk)
           for (int dj = -1; dj <= 1; ++dj)
@@ -407,7 +412,7 @@ LeakGuard::LeakGuard(const image::Volume<float>& smoothed, const IntensityModel&
             }
       }
       for (std::size_t l = 0; l < n; ++l)
-        if (reach[l] && owner[l] == 2) cause[l] = std::uint8_t(LeakCause::Neighbour);
+        if (reach[l] && (owner[l] == 2 || dist[l] > reach_mm)) cause[l] = std::uint8_t(LeakCause::Neighbour);
     }
   }
   // The balloon's vertices sit on the wall, half-way between band and surroundings, often in a
