@@ -2,6 +2,8 @@
 #include "ido/io/report_json.h"
 
 #include <cmath>
+#include <optional>
+#include <vector>
 
 namespace ido::io {
 namespace {
@@ -9,6 +11,19 @@ namespace {
 using json = Json;
 
 json vec(const Vec3& v) { return json::array({v.x(), v.y(), v.z()}); }
+
+/// A list of points as [[x, y, z], ...].
+json vecs(const std::vector<Vec3>& points) {
+  json out = json::array();
+  for (const Vec3& p : points) out.push_back(vec(p));
+  return out;
+}
+
+/// An optional figure: the value, or null when unset.
+template <class T>
+json value_or_null(const std::optional<T>& v) {
+  return v ? json(*v) : json(nullptr);
+}
 
 }  // namespace
 
@@ -24,7 +39,7 @@ json to_json(const geometry::MeshCheckReport& r) {
           {"oriented", r.oriented},
           {"euler_characteristic", r.euler_characteristic},
           {"components", r.components},
-          {"genus", r.genus ? json(*r.genus) : json(nullptr)},
+          {"genus", value_or_null(r.genus)},
           {"boundary_edges", r.boundary_edges},
           {"non_manifold_edges", r.non_manifold_edges},
           {"non_manifold_vertices", r.non_manifold_vertices},
@@ -66,27 +81,24 @@ json to_json(const segment::SegmentationScores& s) {
 }
 
 json to_json(const segment::BalloonReport& r) {
-  json events = json::array(), markers = json::array();
+  json events = json::array();
   for (const segment::LeakEvent& e : r.leaks)
     events.push_back(json{{"cause", segment::leak_cause_name(e.cause)},
                       {"position_mm", vec(e.position_mm)},
                       {"iteration", e.iteration},
                       {"neck_area_mm2", e.neck_area_mm2},
                       {"neck_radius_mm", e.neck_radius_mm}});
-  for (const Vec3& m : r.neighbour_markers_mm) markers.push_back(vec(m));
-  json stops = json::array();
-  for (const Vec3& p : r.stop_points_mm) stops.push_back(vec(p));
   return {{"reference", r.model.reference},
           {"tolerance", r.model.tolerance},
           {"accept_brighter", r.model.accept_brighter},
-          {"outside_level_used", r.outside_level ? json(*r.outside_level) : json(nullptr)},
+          {"outside_level_used", value_or_null(r.outside_level)},
           {"iterations", r.iterations},
           {"leak_control",
            {{"seed_radius_mm", r.seed_radius_mm},
             {"chamber_radius_mm", finite_or_null(r.chamber_radius_mm)},
-            {"neighbour_markers_mm", markers},
+            {"neighbour_markers_mm", vecs(r.neighbour_markers_mm)},
             {"events", events},
-            {"stop_points_mm", stops},
+            {"stop_points_mm", vecs(r.stop_points_mm)},
             {"max_radius_mm", finite_or_null(r.max_radius_mm)}}},
           {"seconds", r.seconds},
           {"phase_seconds",
@@ -133,19 +145,14 @@ json to_json(const sim::EnergyReport& e) {
 json segment_report(const segment::SegmentRequest& request, const segment::BalloonResult& result,
                     const std::filesystem::path& surface, const std::filesystem::path& mask) {
   const segment::BalloonOptions& bo = request.options;
-  const auto points = [](const std::vector<Vec3>& ps) {
-    json out = json::array();
-    for (const Vec3& p : ps) out.push_back(vec(p));
-    return out;
-  };
   json j = {{"input", request.input},
-            {"seeds_mm", points(request.seeds_mm)},
+            {"seeds_mm", vecs(request.seeds_mm)},
             {"organ", segment::organ_name(request.organ)},
             {"edge_reach_voxels", bo.edge_reach_voxels},
-            {"outside_level", bo.outside_level ? json(*bo.outside_level) : json(nullptr)}};
+            {"outside_level", value_or_null(bo.outside_level)}};
   j.update(to_json(result.report));  // the balloon's figures, as every report writes them
   // The region of interest (null: none); the stop points and radius bound are the balloon's.
-  j["roi_mm"] = bo.roi_mm ? points({bo.roi_mm->min, bo.roi_mm->max}) : json(nullptr);
+  j["roi_mm"] = bo.roi_mm ? vecs({bo.roi_mm->min, bo.roi_mm->max}) : json(nullptr);
   j["surface"] = surface.empty() ? json(nullptr) : json(surface.string());
   j["mask"] = mask.empty() ? json(nullptr) : json(mask.string());
   return j;
